@@ -1,0 +1,27 @@
+//! The face front end of visage (paper §3, ERRATA 7–8): MediaPipe's BlazeFace detector and
+//! FaceMesh landmark network run in pure Rust from the original Apache-2.0 `.tflite` files,
+//! video tracking, and the metric face geometry that turns 468 landmarks into a metric mesh and a
+//! dense depth map.
+//!
+//! Layers: [`tflite`] (flatbuffer reader) → [`network`] (graph compiled to [`ops`] kernels) →
+//! networks ([`detector`], [`landmarker`]) → [`tracker`] → [`face_geometry`].
+
+mod error;
+pub mod float16;
+pub mod model_files;
+pub mod network;
+pub mod ops;
+pub mod tflite;
+
+pub use error::FaceError;
+pub use model_files::{models_dir, ModelFile};
+pub use network::Network;
+pub mod anchors;
+pub mod landmark_network;
+
+pub use landmark_network::{CropLandmarks, LandmarkNetwork, LANDMARK_INPUT, NUM_LANDMARKS};
+
+/// The logistic function `1 / (1 + e^−x)`, with the logit clipped to ±100 as MediaPipe does.
+pub fn sigmoid(x: f32) -> f32 {
+    1.0 / (1.0 + (-x.clamp(-100.0, 100.0)).exp())
+}

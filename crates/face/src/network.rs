@@ -1,0 +1,493 @@
+//! A small inference engine for MediaPipe's face networks: the TFLite graph is compiled once into
+//! a list of kernel calls over pre-allocated buffers, then run per frame without allocating.
+//!
+//! Why not tract: `tract-tflite` 0.23 refuses these files (no `DEQUANTIZE`, no `PRELU`, registry
+//! not extensible). The networks use ten operators, all NHWC with batch 1, so the engine folds the
+//! float16 `DEQUANTIZE` constants to f32 at load time, re-lays out convolution weights for
+//! channel-contiguous inner loops and runs the hand-written kernels of [`crate::ops`].
+
+use crate::float16::f16_slice_to_f32;
+use crate::ops::{self, Conv2dWeights, Window};
+use crate::tflite::{OpCode, TensorType, TfliteModel};
+use crate::FaceError;
+
+/// One compiled operator. Tensor indices refer to [`Network`]'s value buffers.
+#[derive(Clone, Debug)]
+enum Step {
+    Conv {
+        x: usize,
+        y: usize,
+        win: Window,
+        wts: Conv2dWeights,
+    },
+    Depthwise {
+        x: usize,
+        y: usize,
+        win: Window,
+        c: usize,
+        w: Vec<f32>,
+        b: Vec<f32>,
+    },
+    Prelu {
+        x: usize,
+        y: usize,
+        alpha: Vec<f32>,
+    },
+    Relu {
+        x: usize,
+        y: usize,
+    },
+    Add {
+        a: usize,
+        b: usize,
+        y: usize,
+    },
+    MaxPool {
+        x: usize,
+        y: usize,
+        win: Window,
+        c: usize,
+    },
+    Pad {
+        x: usize,
+        y: usize,
+        shape: [usize; 4],
+        pads: [[usize; 2]; 4],
+    },
+    Copy {
+        x: usize,
+        y: usize,
+    },
+    Concat {
+        xs: Vec<usize>,
+        y: usize,
+        outer: usize,
+    },
+}
+
+/// A compiled network: run with [`Network::run`], read outputs with [`Network::output`].
+#[derive(Clone, Debug)]
+pub struct Network {
+    steps: Vec<Step>,
+    /// One buffer per tensor of the graph (empty for constants).
+    values: Vec<Vec<f32>>,
+    shapes: Vec<Vec<usize>>,
+    names: Vec<String>,
+    input: usize,
+    outputs: Vec<usize>,
+    scratch: Vec<f32>,
+}
+
+fn err(name: &str, reason: String) -> FaceError {
+    FaceError::Tflite {
+        name: name.to_owned(),
+        reason,
+    }
+}
+
+impl Network {
+    /// Compiles a parsed model. `name` is used in error messages.
+    ///
+    /// Errors when the graph uses an operator variant the kernels do not implement (fused
+    /// activations, dilation, depth multiplier ≠ 1, broadcasting adds, non-constant weights).
+    pub fn compile(model: &TfliteModel, name: &str) -> Result<Network, FaceError> {
+        let n = model.tensors.len();
+        let shapes: Vec<Vec<usize>> = model.tensors.iter().map(|t| t.shape.clone()).collect();
+        // Constant values: float32 buffers directly, float16 through DEQUANTIZE.
+        let mut consts: Vec<Option<Vec<f32>>> = vec![None; n];
+        let mut ints: Vec<Option<Vec<i32>>> = vec![None; n];
+        for (i, t) in model.tensors.iter().enumerate() {
+            let data = &model.buffers[t.buffer];
+            if data.is_empty() {
+                continue;
+            }
+            let count: usize = t.shape.iter().product();
+            let width = match t.dtype {
+                TensorType::Float32 | TensorType::Int32 => 4,
+                TensorType::Float16 => 2,
+                TensorType::Other(code) => {
+                    return Err(err(
+                        name,
+                        format!("tensor {} has unsupported type {code}", t.name),
+                    ))
+                }
+            };
+            if data.len() != count * width {
+                return Err(err(
+                    name,
+                    format!(
+                        "tensor {} has {} bytes for shape {:?}",
+                        t.name,
+                        data.len(),
+                        t.shape
+                    ),
+                ));
+            }
+            match t.dtype {
+                TensorType::Float32 => {
+                    consts[i] = Some(
+                        data.chunks_exact(4)
+                            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                            .collect(),
+                    )
+                }
+                TensorType::Float16 => consts[i] = Some(f16_slice_to_f32(data)),
+                TensorType::Int32 => {
+                    ints[i] = Some(
+                        data.chunks_exact(4)
+                            .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                            .collect(),
+                    )
+                }
+                TensorType::Other(_) => {}
+            }
+        }
+        let mut steps = Vec::new();
+        let mut produced = vec![false; n];
+        for &i in &model.inputs {
+            produced[i] = true;
+        }
+        for (k, op) in model.operators.iter().enumerate() {
+            let ctx = |reason: String| err(name, format!("operator {k} ({:?}): {reason}", op.code));
+            if op.options.activation != 0 {
+                return Err(ctx(format!(
+                    "fused activation {} not supported",
+                    op.options.activation
+                )));
+            }
+            let input = |j: usize| -> Result<usize, FaceError> {
+                op.inputs
+                    .get(j)
+                    .and_then(|&t| usize::try_from(t).ok())
+                    .ok_or_else(|| ctx(format!("missing input {j}")))
+            };
+            let Some(&y) = op.outputs.first() else {
+                return Err(ctx("no output".into()));
+            };
+            let constant = |t: usize| -> Result<&Vec<f32>, FaceError> {
+                consts[t].as_ref().ok_or_else(|| {
+                    ctx(format!(
+                        "tensor {} must be a constant",
+                        model.tensors[t].name
+                    ))
+                })
+            };
+            let activation = |t: usize| -> Result<usize, FaceError> {
+                if produced[t] {
+                    Ok(t)
+                } else {
+                    Err(ctx(format!(
+                        "tensor {} is used before it is computed",
+                        model.tensors[t].name
+                    )))
+                }
+            };
+            let nhwc = |t: usize| -> Result<[usize; 3], FaceError> {
+                match shapes[t].as_slice() {
+                    &[1, h, w, c] => Ok([h, w, c]),
+                    s => Err(ctx(format!(
+                        "tensor {} has shape {s:?}, expected [1, H, W, C]",
+                        model.tensors[t].name
+                    ))),
+                }
+            };
+            let step = match op.code {
+                OpCode::Dequantize => {
+                    let x = input(0)?;
+                    consts[y] = Some(constant(x)?.clone());
+                    continue;
+                }
+                OpCode::Conv2d => {
+                    let x = activation(input(0)?)?;
+                    let [h, w, ci] = nhwc(x)?;
+                    let (kt, bt) = (input(1)?, input(2)?);
+                    let (kernel, bias) = (constant(kt)?, constant(bt)?);
+                    let &[co, kh, kw, kci] = shapes[kt].as_slice() else {
+                        return Err(ctx(format!("kernel shape {:?}", shapes[kt])));
+                    };
+                    if kci != ci || bias.len() != co || op.options.dilation != [1, 1] {
+                        return Err(ctx(format!(
+                            "kernel {:?} does not fit input {:?}",
+                            shapes[kt], shapes[x]
+                        )));
+                    }
+                    let win = Window::new(h, w, [kh, kw], op.options.stride, op.options.padding);
+                    check_out(&ctx, &shapes[y], [win.out_h, win.out_w, co])?;
+                    let wts = Conv2dWeights::from_ohwi(kernel, co, kh, kw, ci, bias.clone());
+                    Step::Conv { x, y, win, wts }
+                }
+                OpCode::DepthwiseConv2d => {
+                    let x = activation(input(0)?)?;
+                    let [h, w, c] = nhwc(x)?;
+                    let (kt, bt) = (input(1)?, input(2)?);
+                    let (kernel, bias) = (constant(kt)?, constant(bt)?);
+                    let &[1, kh, kw, kc] = shapes[kt].as_slice() else {
+                        return Err(ctx(format!("kernel shape {:?}", shapes[kt])));
+                    };
+                    if kc != c
+                        || bias.len() != c
+                        || op.options.depth_multiplier != 1
+                        || op.options.dilation != [1, 1]
+                    {
+                        return Err(ctx(format!(
+                            "kernel {:?} does not fit input {:?}",
+                            shapes[kt], shapes[x]
+                        )));
+                    }
+                    let win = Window::new(h, w, [kh, kw], op.options.stride, op.options.padding);
+                    check_out(&ctx, &shapes[y], [win.out_h, win.out_w, c])?;
+                    Step::Depthwise {
+                        x,
+                        y,
+                        win,
+                        c,
+                        w: kernel.clone(),
+                        b: bias.clone(),
+                    }
+                }
+                OpCode::Prelu => {
+                    let x = activation(input(0)?)?;
+                    let alpha = constant(input(1)?)?.clone();
+                    let c = *shapes[x].last().unwrap_or(&0);
+                    if alpha.len() != c || shapes[y] != shapes[x] {
+                        return Err(ctx(format!(
+                            "alpha of {} values for {c} channels",
+                            alpha.len()
+                        )));
+                    }
+                    Step::Prelu { x, y, alpha }
+                }
+                OpCode::Relu => {
+                    let x = activation(input(0)?)?;
+                    Step::Relu { x, y }
+                }
+                OpCode::Add => {
+                    let (a, b) = (activation(input(0)?)?, activation(input(1)?)?);
+                    if shapes[a] != shapes[b] || shapes[a] != shapes[y] {
+                        return Err(ctx(format!(
+                            "broadcasting add {:?} + {:?} not supported",
+                            shapes[a], shapes[b]
+                        )));
+                    }
+                    Step::Add { a, b, y }
+                }
+                OpCode::MaxPool2d => {
+                    let x = activation(input(0)?)?;
+                    let [h, w, c] = nhwc(x)?;
+                    let win = Window::new(
+                        h,
+                        w,
+                        op.options.filter,
+                        op.options.stride,
+                        op.options.padding,
+                    );
+                    check_out(&ctx, &shapes[y], [win.out_h, win.out_w, c])?;
+                    Step::MaxPool { x, y, win, c }
+                }
+                OpCode::Pad => {
+                    let x = activation(input(0)?)?;
+                    let pt = input(1)?;
+                    let p = ints[pt]
+                        .as_ref()
+                        .ok_or_else(|| ctx("paddings must be a constant int32 tensor".into()))?;
+                    let shape: [usize; 4] = match shapes[x].as_slice() {
+                        &[a, b, c, d] => [a, b, c, d],
+                        s => return Err(ctx(format!("pad of a rank-{} tensor", s.len()))),
+                    };
+                    if p.len() != 8 || p.iter().any(|&v| v < 0) {
+                        return Err(ctx(format!("paddings {p:?}")));
+                    }
+                    let pads: [[usize; 2]; 4] =
+                        std::array::from_fn(|d| [p[2 * d] as usize, p[2 * d + 1] as usize]);
+                    let out: Vec<usize> =
+                        (0..4).map(|d| shape[d] + pads[d][0] + pads[d][1]).collect();
+                    if out != shapes[y] {
+                        return Err(ctx(format!("padded shape {out:?} ≠ {:?}", shapes[y])));
+                    }
+                    Step::Pad { x, y, shape, pads }
+                }
+                OpCode::Reshape => {
+                    let x = activation(input(0)?)?;
+                    if shapes[x].iter().product::<usize>() != shapes[y].iter().product::<usize>() {
+                        return Err(ctx(format!("reshape {:?} → {:?}", shapes[x], shapes[y])));
+                    }
+                    Step::Copy { x, y }
+                }
+                OpCode::Concatenation => {
+                    let xs = op
+                        .inputs
+                        .iter()
+                        .map(|&t| {
+                            usize::try_from(t)
+                                .map_err(|_| ctx("absent input".into()))
+                                .and_then(activation)
+                        })
+                        .collect::<Result<Vec<_>, _>>()?;
+                    let rank = shapes[y].len() as i32;
+                    let axis = if op.options.axis < 0 {
+                        op.options.axis + rank
+                    } else {
+                        op.options.axis
+                    };
+                    if !(0..rank).contains(&axis) {
+                        return Err(ctx(format!("axis {} for rank {rank}", op.options.axis)));
+                    }
+                    let outer: usize = shapes[y][..axis as usize].iter().product();
+                    let total: usize = xs
+                        .iter()
+                        .map(|&t| shapes[t].iter().product::<usize>())
+                        .sum();
+                    if total != shapes[y].iter().product::<usize>() {
+                        return Err(ctx("concatenated sizes do not add up".into()));
+                    }
+                    Step::Concat { xs, y, outer }
+                }
+            };
+            produced[y] = true;
+            steps.push(step);
+        }
+        let Some(&input) = model.inputs.first() else {
+            return Err(err(name, "no graph input".into()));
+        };
+        for &o in &model.outputs {
+            if !produced[o] {
+                return Err(err(
+                    name,
+                    format!("output {} is never computed", model.tensors[o].name),
+                ));
+            }
+        }
+        let values = (0..n)
+            .map(|i| {
+                if produced[i] {
+                    vec![0.0; shapes[i].iter().product()]
+                } else {
+                    Vec::new()
+                }
+            })
+            .collect();
+        let scratch_len = steps
+            .iter()
+            .map(|s| match s {
+                Step::Conv { win, wts, .. } => win.k_h * win.k_w * wts.c_in,
+                _ => 0,
+            })
+            .max()
+            .unwrap_or(0);
+        Ok(Network {
+            steps,
+            values,
+            shapes,
+            names: model.tensors.iter().map(|t| t.name.clone()).collect(),
+            input,
+            outputs: model.outputs.clone(),
+            scratch: vec![0.0; scratch_len],
+        })
+    }
+
+    /// Parses and compiles a `.tflite` file's bytes.
+    pub fn from_tflite(bytes: &[u8], name: &str) -> Result<Network, FaceError> {
+        Network::compile(&TfliteModel::parse(bytes, name)?, name)
+    }
+
+    /// Shape of the (single) input tensor, e.g. `[1, 192, 192, 3]`.
+    pub fn input_shape(&self) -> &[usize] {
+        &self.shapes[self.input]
+    }
+
+    /// Mutable access to the input tensor (NHWC, f32) to fill it in place before [`Network::run`].
+    pub fn input_mut(&mut self) -> &mut [f32] {
+        &mut self.values[self.input]
+    }
+
+    /// Runs the graph on the current input tensor.
+    pub fn run(&mut self) {
+        for step in &self.steps {
+            let values = &mut self.values;
+            match step {
+                Step::Conv { x, y, win, wts } => {
+                    let mut out = std::mem::take(&mut values[*y]);
+                    ops::conv2d(&values[*x], win, wts, &mut self.scratch, &mut out);
+                    values[*y] = out;
+                }
+                Step::Depthwise { x, y, win, c, w, b } => {
+                    let mut out = std::mem::take(&mut values[*y]);
+                    ops::depthwise_conv2d(&values[*x], win, *c, w, b, &mut out);
+                    values[*y] = out;
+                }
+                Step::Prelu { x, y, alpha } => {
+                    let mut out = std::mem::take(&mut values[*y]);
+                    ops::prelu(&values[*x], alpha, &mut out);
+                    values[*y] = out;
+                }
+                Step::Relu { x, y } => {
+                    let mut out = std::mem::take(&mut values[*y]);
+                    ops::relu(&values[*x], &mut out);
+                    values[*y] = out;
+                }
+                Step::Add { a, b, y } => {
+                    let mut out = std::mem::take(&mut values[*y]);
+                    ops::add(&values[*a], &values[*b], &mut out);
+                    values[*y] = out;
+                }
+                Step::MaxPool { x, y, win, c } => {
+                    let mut out = std::mem::take(&mut values[*y]);
+                    ops::max_pool2d(&values[*x], win, *c, &mut out);
+                    values[*y] = out;
+                }
+                Step::Pad { x, y, shape, pads } => {
+                    let mut out = std::mem::take(&mut values[*y]);
+                    ops::pad4(&values[*x], *shape, *pads, &mut out);
+                    values[*y] = out;
+                }
+                Step::Copy { x, y } => {
+                    let mut out = std::mem::take(&mut values[*y]);
+                    out.copy_from_slice(&values[*x]);
+                    values[*y] = out;
+                }
+                Step::Concat { xs, y, outer } => {
+                    let mut out = std::mem::take(&mut values[*y]);
+                    let mut pos = 0;
+                    for o in 0..*outer {
+                        for &t in xs {
+                            let chunk = values[t].len() / outer;
+                            out[pos..pos + chunk]
+                                .copy_from_slice(&values[t][o * chunk..(o + 1) * chunk]);
+                            pos += chunk;
+                        }
+                    }
+                    values[*y] = out;
+                }
+            }
+        }
+    }
+
+    /// Output `k` (in the model's output order) after [`Network::run`], with its tensor name.
+    pub fn output(&self, k: usize) -> Option<(&str, &[f32])> {
+        let &t = self.outputs.get(k)?;
+        Some((&self.names[t], &self.values[t]))
+    }
+
+    /// Output tensor by name, e.g. `"conv2d_21"`.
+    pub fn output_named(&self, name: &str) -> Option<&[f32]> {
+        self.outputs
+            .iter()
+            .find(|&&t| self.names[t] == name)
+            .map(|&t| self.values[t].as_slice())
+    }
+}
+
+fn check_out(
+    ctx: &dyn Fn(String) -> FaceError,
+    shape: &[usize],
+    hwc: [usize; 3],
+) -> Result<(), FaceError> {
+    if shape == [1, hwc[0], hwc[1], hwc[2]] {
+        Ok(())
+    } else {
+        Err(ctx(format!(
+            "output shape {shape:?}, computed [1, {}, {}, {}]",
+            hwc[0], hwc[1], hwc[2]
+        )))
+    }
+}

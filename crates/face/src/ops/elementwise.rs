@@ -1,0 +1,53 @@
+/// `y = max(x, 0)` (TFLite `RELU`).
+pub fn relu(x: &[f32], y: &mut [f32]) {
+    for (o, &v) in y.iter_mut().zip(x) {
+        *o = v.max(0.0);
+    }
+}
+
+/// Parametric ReLU with one slope per channel (TFLite `PRELU` with alpha `[1, 1, C]`):
+/// `y = x` where `x ≥ 0`, else `α[c] · x`. `x`, `y` are `[…, C]`.
+///
+/// # Panics
+/// If `x.len()` is not a multiple of `alpha.len()` or `y` has another length.
+#[track_caller]
+pub fn prelu(x: &[f32], alpha: &[f32], y: &mut [f32]) {
+    assert_eq!(x.len(), y.len(), "prelu sizes");
+    assert_eq!(x.len() % alpha.len(), 0, "prelu channel count");
+    for (yr, xr) in y
+        .chunks_exact_mut(alpha.len())
+        .zip(x.chunks_exact(alpha.len()))
+    {
+        for ((o, &v), &a) in yr.iter_mut().zip(xr).zip(alpha) {
+            *o = if v >= 0.0 { v } else { a * v };
+        }
+    }
+}
+
+/// Element-wise sum of two tensors of the same shape (TFLite `ADD`, no broadcasting).
+///
+/// # Panics
+/// If the lengths differ.
+#[track_caller]
+pub fn add(a: &[f32], b: &[f32], y: &mut [f32]) {
+    assert!(a.len() == b.len() && a.len() == y.len(), "add sizes");
+    for ((o, &u), &v) in y.iter_mut().zip(a).zip(b) {
+        *o = u + v;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prelu_relu_add() {
+        let mut y = [0.0; 4];
+        prelu(&[-1.0, 2.0, -3.0, -4.0], &[0.5, 0.25], &mut y);
+        assert_eq!(y, [-0.5, 2.0, -1.5, -1.0]);
+        relu(&[-1.0, 2.0, 0.0, -0.0], &mut y);
+        assert_eq!(y, [0.0, 2.0, 0.0, 0.0]);
+        add(&[1.0, 2.0, 3.0, 4.0], &[0.5; 4], &mut y);
+        assert_eq!(y, [1.5, 2.5, 3.5, 4.5]);
+    }
+}

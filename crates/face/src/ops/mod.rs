@@ -1,0 +1,19 @@
+//! Hand-written NHWC kernels for the operator set of MediaPipe's face networks.
+//!
+//! All tensors have batch 1 and are stored row-major as `[H, W, C]` (channels fastest), like
+//! TFLite. Inner loops run over contiguous channels so that the compiler vectorises them.
+//! Kernels write into caller-owned outputs and never allocate.
+
+mod conv2d;
+mod depthwise_conv2d;
+mod elementwise;
+mod max_pool2d;
+mod pad;
+mod window;
+
+pub use conv2d::{conv2d, Conv2dWeights};
+pub use depthwise_conv2d::depthwise_conv2d;
+pub use elementwise::{add, prelu, relu};
+pub use max_pool2d::max_pool2d;
+pub use pad::pad4;
+pub use window::Window;

@@ -1,0 +1,43 @@
+//! Raw parity with the reference TFLite interpreter (`shared/reference/facemesh`): the landmark
+//! network on `crop192.png` within 1e-2 crop pixels of `landmarks_raw.json` (max over all cases).
+
+mod common;
+
+use visage_face::LandmarkNetwork;
+
+#[test]
+fn landmark_network_matches_tflite_on_every_case() {
+    let (Some(reference), Some(models)) = (common::reference_dir(), common::models_dir()) else {
+        return;
+    };
+    let mut net = LandmarkNetwork::load(&models).unwrap();
+    let mut worst = 0.0f64;
+    for case in common::cases(&reference) {
+        let crop = common::read_rgb(reference.join(&case).join("crop192.png"));
+        let out = net.run_rgb8(crop.as_raw()).unwrap();
+        let expected = common::read_json(reference.join(&case).join("landmarks_raw.json"));
+        let pts = expected["landmarks_crop_px"].as_array().unwrap();
+        assert_eq!(pts.len(), out.points.len());
+        let mut case_max = 0.0f64;
+        for (p, e) in out.points.iter().zip(pts) {
+            for k in 0..3 {
+                case_max = case_max.max((p[k] as f64 - e[k].as_f64().unwrap()).abs());
+            }
+        }
+        let logit = expected["presence_logit"].as_f64().unwrap();
+        println!(
+            "{case}: max |Δ| = {case_max:.2e} crop px, presence logit {} vs {logit}",
+            out.presence_logit
+        );
+        assert!(
+            case_max < 1e-2,
+            "{case}: max landmark difference {case_max}"
+        );
+        assert!(
+            (out.presence_logit as f64 - logit).abs() < 1e-2,
+            "{case}: presence logit"
+        );
+        worst = worst.max(case_max);
+    }
+    println!("worst case: {worst:.2e} crop px");
+}
