@@ -1,0 +1,119 @@
+//! Sparse Cholesky factorisation, computed once and reused for every frame (paper §4).
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
+};
+use std::sync::Arc;
+
+use faer::{Conj, MatMut, Par, Side};
+
+use crate::sparse::SparseMatrix;
+use crate::FemError;
+
+/// `A = LLᵀ` of a sparse symmetric positive definite matrix with a fill-reducing AMD ordering
+/// (faer's symbolic + numeric factorisation, each done once), single-threaded: at these sizes
+/// faer's parallel mode was measured slower (shared/DEPENDENCIES.md); parallelism goes over
+/// frames and stages instead.
+///
+/// [`Factorization::solve_in_place`] reuses a workspace sized at construction for up to
+/// [`Factorization::MAX_RHS_COLUMNS`] columns, so per-frame solves allocate nothing.
+pub struct Factorization {
+    symbolic: Arc<SymbolicCholesky<usize>>,
+    values: Vec<f64>,
+    workspace: MemBuffer,
+    n: usize,
+}
+
+impl std::fmt::Debug for Factorization {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Factorization")
+            .field("n", &self.n)
+            .field("factor_nnz", &self.values.len())
+            .finish()
+    }
+}
+
+impl Factorization {
+    /// Right-hand-side columns a solve can take without allocating (x, y, z).
+    pub const MAX_RHS_COLUMNS: usize = 3;
+
+    /// Factors `a` (both triangles stored; the lower one is read).
+    pub fn new(a: &SparseMatrix) -> Result<Self, FemError> {
+        let symbolic = factorize_symbolic_cholesky(
+            a.symbolic(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| FemError::Assembly {
+            reason: format!("symbolic Cholesky: {e:?}"),
+        })?;
+        Self::numeric(Arc::new(symbolic), a)
+    }
+
+    /// Factors `a`, which must have the same sparsity pattern as the matrix this factorisation
+    /// was built from, reusing its symbolic analysis (ordering and elimination tree).
+    pub fn with_same_pattern(&self, a: &SparseMatrix) -> Result<Self, FemError> {
+        Self::numeric(Arc::clone(&self.symbolic), a)
+    }
+
+    fn numeric(symbolic: Arc<SymbolicCholesky<usize>>, a: &SparseMatrix) -> Result<Self, FemError> {
+        let n = a.nrows();
+        if symbolic.nrows() != n {
+            return Err(FemError::Dimension {
+                what: "matrix order for the shared symbolic factorisation",
+                expected: symbolic.nrows(),
+                got: n,
+            });
+        }
+        let mut values = vec![0.0; symbolic.len_val()];
+        let mut scratch = MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()));
+        symbolic
+            .factorize_numeric_llt(
+                &mut values,
+                a.as_ref(),
+                Side::Lower,
+                LltRegularization::default(),
+                Par::Seq,
+                MemStack::new(&mut scratch),
+                Default::default(),
+            )
+            .map_err(|e| FemError::NotPositiveDefinite {
+                reason: format!("{e:?}"),
+            })?;
+        let workspace = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(Self::MAX_RHS_COLUMNS, Par::Seq));
+        Ok(Factorization {
+            symbolic,
+            values,
+            workspace,
+            n,
+        })
+    }
+
+    /// Number of stored values of the factor L (the fill).
+    pub fn factor_nnz(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Order of the matrix.
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// Overwrites `rhs` (n × c, c ≤ 3) with `A⁻¹ rhs`. Allocates nothing.
+    ///
+    /// # Panics
+    /// If `rhs` has the wrong number of rows or more than [`Self::MAX_RHS_COLUMNS`] columns.
+    #[track_caller]
+    pub fn solve_in_place(&mut self, rhs: MatMut<'_, f64>) {
+        assert!(rhs.nrows() == self.n && rhs.ncols() <= Self::MAX_RHS_COLUMNS);
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            rhs,
+            Par::Seq,
+            MemStack::new(&mut self.workspace),
+        );
+    }
+}
