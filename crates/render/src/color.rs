@@ -1,0 +1,78 @@
+//! Colour encoding: linear RGB ↔ sRGB (IEC 61966-2-1) and PNG output.
+
+use std::path::Path;
+
+use crate::RenderError;
+
+/// sRGB-encoded value in `[0, 1]` → linear.
+#[inline]
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Linear value → sRGB-encoded, clamped to `[0, 1]` (NaN → 0).
+#[inline]
+pub fn linear_to_srgb(c: f32) -> f32 {
+    let c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// An 8-bit sRGB value → linear.
+#[inline]
+pub fn srgb_to_linear_u8(c: u8) -> f32 {
+    srgb_to_linear(c as f32 / 255.0)
+}
+
+/// A linear value → 8-bit sRGB, rounded.
+#[inline]
+pub fn linear_to_srgb_u8(c: f32) -> u8 {
+    (linear_to_srgb(c) * 255.0 + 0.5) as u8
+}
+
+/// Writes a linear RGB image (`width × height`, row-major, values clamped to `[0, 1]`) as an
+/// 8-bit sRGB PNG. Errors name the file.
+pub fn write_srgb_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    linear: &[[f32; 3]],
+) -> Result<(), RenderError> {
+    let bytes: Vec<u8> = linear
+        .iter()
+        .flat_map(|p| p.map(linear_to_srgb_u8))
+        .collect();
+    let img = image::RgbImage::from_raw(width, height, bytes).ok_or_else(|| RenderError::File {
+        path: path.to_owned(),
+        reason: format!(
+            "{} pixels do not make a {width}×{height} image",
+            linear.len()
+        ),
+    })?;
+    img.save(path).map_err(|e| RenderError::File {
+        path: path.to_owned(),
+        reason: format!("cannot write PNG: {e}"),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_round_trips_every_byte() {
+        for b in 0..=255u8 {
+            assert_eq!(linear_to_srgb_u8(srgb_to_linear_u8(b)), b);
+        }
+        assert_eq!(linear_to_srgb_u8(f32::NAN), 0);
+        assert_eq!(linear_to_srgb_u8(7.0), 255);
+        assert!((srgb_to_linear(0.5) - 0.214_041).abs() < 1e-5);
+    }
+}

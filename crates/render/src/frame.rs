@@ -1,0 +1,266 @@
+//! The colour renderer: Algorithm 3 end to end, producing every buffer of a frame.
+
+use rayon::prelude::*;
+use visage_camera::{DepthKind, DepthMap};
+use visage_mesh::TriMesh;
+
+use crate::camera::Camera;
+use crate::mat4::{Mat3, Mat4};
+use crate::normals::{normal_matrix, transform_normal, vertex_normals};
+use crate::rasterize::{CullMode, Rasterizer, NO_TRIANGLE};
+use crate::shading::{blinn_phong, Light, Material};
+use crate::texture::{Texture, Wrap};
+use crate::RenderError;
+
+/// Where the surface colour `C_tex` of Eq. (6.4) comes from.
+#[derive(Clone, Copy, Debug)]
+pub enum Albedo<'a> {
+    /// Bilinear samples (Eq. (6.3)) of `texture` at the mesh's interpolated UVs (requires
+    /// `mesh.uvs`).
+    Texture { texture: &'a Texture, wrap: Wrap },
+    /// The mesh's interpolated vertex colours (requires `mesh.colors`).
+    VertexColors,
+    /// One linear RGB colour for the whole surface.
+    Constant([f32; 3]),
+}
+
+/// Everything besides geometry and camera that decides a frame's colours.
+#[derive(Clone, Copy, Debug)]
+pub struct Scene<'a> {
+    /// Surface reflectances (validated: energy-conserving).
+    pub material: Material,
+    /// The light, in camera coordinates.
+    pub light: Light,
+    /// Surface colour source.
+    pub albedo: Albedo<'a>,
+    /// Linear RGB of pixels that see no surface.
+    pub background: [f32; 3],
+    /// Flip normals that face away from the viewer before shading, so the back of an open
+    /// surface is lit like its front.
+    pub two_sided: bool,
+    /// Orientation culling.
+    pub cull: CullMode,
+}
+
+impl Default for Scene<'_> {
+    /// Default material and light, light-grey constant albedo, black background, two-sided
+    /// lighting, no culling.
+    fn default() -> Self {
+        Scene {
+            material: Material::default(),
+            light: Light::default(),
+            albedo: Albedo::Constant([0.8; 3]),
+            background: [0.0; 3],
+            two_sided: true,
+            cull: CullMode::None,
+        }
+    }
+}
+
+/// The buffers of one rendered frame, all `width × height`, row-major (`[v · width + u]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// Linear RGB radiance (Eq. (6.4)), the background colour where no surface is seen.
+    pub color: Vec<[f32; 3]>,
+    /// Metric depth of the kind chosen at construction, `0` = background.
+    pub depth: DepthMap,
+    /// Visible mesh triangle, [`NO_TRIANGLE`] for background.
+    pub triangle_id: Vec<u32>,
+    /// Perspective-correct barycentrics in the visible triangle, zero for background.
+    pub barycentrics: Vec<[f32; 3]>,
+}
+
+impl Frame {
+    /// Buffers for `width × height` frames whose depth is of kind `kind`.
+    pub fn new(width: u32, height: u32, kind: DepthKind) -> Frame {
+        let n = width as usize * height as usize;
+        Frame {
+            width,
+            height,
+            color: vec![[0.0; 3]; n],
+            depth: DepthMap::empty(width, height, kind),
+            triangle_id: vec![NO_TRIANGLE; n],
+            barycentrics: vec![[0.0; 3]; n],
+        }
+    }
+}
+
+/// The renderer of Algorithm 3: reusable scratch (rasteriser, per-vertex normals); one call per
+/// frame writes into a caller-owned [`Frame`].
+#[derive(Debug, Default)]
+pub struct Renderer {
+    rasterizer: Rasterizer,
+    object_normals: Vec<[f64; 3]>,
+    camera_normals: Vec<[f32; 3]>,
+}
+
+impl Renderer {
+    /// A renderer with empty scratch buffers.
+    pub fn new() -> Renderer {
+        Renderer::default()
+    }
+
+    /// The rasteriser state of the last frame (visibility buffer, camera-space positions).
+    pub fn rasterizer(&self) -> &Rasterizer {
+        &self.rasterizer
+    }
+
+    /// Renders `mesh` transformed by `model` (object → world, `M_k` of Eq. (6.1)) through
+    /// `camera` into `frame`.
+    ///
+    /// Normals: the mesh's own if present, else area-weighted vertex normals; both are taken to
+    /// camera space by the inverse transpose of the model-view's linear part (Eq. (6.2)).
+    ///
+    /// # Errors
+    /// Invalid mesh, camera, model matrix, material or light; `frame` of another size than the
+    /// camera's image; an albedo source the mesh lacks (UVs or colours).
+    pub fn render(
+        &mut self,
+        mesh: &TriMesh,
+        camera: &Camera,
+        model: &Mat4,
+        scene: &Scene<'_>,
+        frame: &mut Frame,
+    ) -> Result<(), RenderError> {
+        crate::validate::check_mesh(mesh)?;
+        scene.material.validate()?;
+        scene.light.validate()?;
+        let k = camera.intrinsics;
+        if frame.width != k.width
+            || frame.height != k.height
+            || frame.depth.width != k.width
+            || frame.depth.height != k.height
+            || frame.color.len() != k.width as usize * k.height as usize
+            || frame.depth.data.len() != frame.color.len()
+            || frame.triangle_id.len() != frame.color.len()
+            || frame.barycentrics.len() != frame.color.len()
+        {
+            return Err(RenderError::BufferSize {
+                buffer: "frame",
+                width: frame.width,
+                height: frame.height,
+                expected_width: k.width,
+                expected_height: k.height,
+            });
+        }
+        match scene.albedo {
+            Albedo::Texture { .. } if mesh.uvs.is_empty() => {
+                return Err(RenderError::MissingAttribute {
+                    attribute: "texture coordinates",
+                    needed_by: "a textured render",
+                })
+            }
+            Albedo::VertexColors if mesh.colors.is_empty() => {
+                return Err(RenderError::MissingAttribute {
+                    attribute: "vertex colours",
+                    needed_by: "a vertex-colour render",
+                })
+            }
+            _ => {}
+        }
+        if !model.is_finite_affine() {
+            return Err(RenderError::Transform {
+                what: "model matrix",
+                reason: format!("not a finite affine matrix: {model:?}"),
+            });
+        }
+        let model_view: Mat3 = camera.pose.matrix().mul(model).linear();
+        let nm = normal_matrix(&model_view)?;
+
+        self.rasterizer
+            .rasterize(&mesh.vertices, &mesh.triangles, model, camera, scene.cull)?;
+
+        // Step 3 of Algorithm 3: normals to camera space (Eq. (6.2)).
+        let object_normals: &[[f64; 3]] = if mesh.normals.is_empty() {
+            self.object_normals = vertex_normals(&mesh.vertices, &mesh.triangles);
+            &self.object_normals
+        } else {
+            &mesh.normals
+        };
+        self.camera_normals.resize(object_normals.len(), [0.0; 3]);
+        object_normals
+            .par_iter()
+            .zip(self.camera_normals.par_iter_mut())
+            .with_min_len(4096)
+            .for_each(|(n, out)| *out = transform_normal(&nm, *n).map(|x| x as f32));
+
+        // Steps 7–10: one shading evaluation per visible pixel.
+        let raster = &self.rasterizer;
+        let normals = &self.camera_normals;
+        let positions = raster.camera_positions();
+        let kind = frame.depth.kind;
+        let w = k.width as usize;
+        frame
+            .color
+            .par_chunks_mut(w)
+            .zip(frame.depth.data.par_chunks_mut(w))
+            .zip(frame.triangle_id.par_chunks_mut(w))
+            .zip(frame.barycentrics.par_chunks_mut(w))
+            .enumerate()
+            .for_each(|(y, (((c_row, d_row), t_row), b_row))| {
+                for x in 0..w {
+                    let Some(f) = raster.fragment(x as u32, y as u32) else {
+                        c_row[x] = scene.background;
+                        d_row[x] = 0.0;
+                        t_row[x] = NO_TRIANGLE;
+                        b_row[x] = [0.0; 3];
+                        continue;
+                    };
+                    // Indices were validated before rasterisation.
+                    let t = mesh.triangles[f.triangle as usize].map(|i| i as usize);
+                    let b = f.bary;
+                    let lerp3 = |a: [f64; 3], bb: [f64; 3], c: [f64; 3]| -> [f64; 3] {
+                        std::array::from_fn(|j| b[0] * a[j] + b[1] * bb[j] + b[2] * c[j])
+                    };
+                    let p = lerp3(positions[t[0]], positions[t[1]], positions[t[2]]);
+                    let p_len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+                    let view = [
+                        (-p[0] / p_len) as f32,
+                        (-p[1] / p_len) as f32,
+                        (-p[2] / p_len) as f32,
+                    ];
+                    let (n0, n1, n2) = (normals[t[0]], normals[t[1]], normals[t[2]]);
+                    let (b0, b1, b2) = (b[0] as f32, b[1] as f32, b[2] as f32);
+                    let mut n: [f32; 3] =
+                        std::array::from_fn(|j| b0 * n0[j] + b1 * n1[j] + b2 * n2[j]);
+                    let n_len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                    if n_len > 0.0 {
+                        n = n.map(|v| v / n_len);
+                    }
+                    if scene.two_sided && n[0] * view[0] + n[1] * view[1] + n[2] * view[2] < 0.0 {
+                        n = n.map(|v| -v);
+                    }
+                    let albedo = match scene.albedo {
+                        Albedo::Texture { texture, wrap } => {
+                            let (u0, u1, u2) = (mesh.uvs[t[0]], mesh.uvs[t[1]], mesh.uvs[t[2]]);
+                            let uv = [
+                                b[0] * u0[0] + b[1] * u1[0] + b[2] * u2[0],
+                                b[0] * u0[1] + b[1] * u1[1] + b[2] * u2[1],
+                            ];
+                            let s = texture.sample(uv, wrap);
+                            [s[0], s[1], s[2]]
+                        }
+                        Albedo::VertexColors => {
+                            let (c0, c1, c2) =
+                                (mesh.colors[t[0]], mesh.colors[t[1]], mesh.colors[t[2]]);
+                            std::array::from_fn(|j| b0 * c0[j] + b1 * c1[j] + b2 * c2[j])
+                        }
+                        Albedo::Constant(c) => c,
+                    };
+                    c_row[x] = blinn_phong(&scene.material, &scene.light, n, view, albedo);
+                    let value = match kind {
+                        DepthKind::Z => f.z,
+                        DepthKind::Ray => f.z * p_len / p[2],
+                    };
+                    d_row[x] = value as f32;
+                    t_row[x] = f.triangle;
+                    b_row[x] = [b0, b1, b2];
+                }
+            });
+        Ok(())
+    }
+}

@@ -1,0 +1,72 @@
+//! visage-render: a software rasteriser for metric depth, triangle-id, barycentric and shaded
+//! colour images of triangle meshes — paper §6, Algorithm 3, with ERRATA 12.
+//!
+//! It is exact enough to serve as ground truth: the depth stored at a pixel is the intersection
+//! of that pixel's ray with the visible triangle (to `f32` rounding of the stored value), and
+//! coverage follows a watertight fill rule.
+//!
+//! # Conventions
+//! - **Camera coordinates** (the project's, see `visage_camera`): x right, y down, z forward,
+//!   metres. Without a pose the camera sits at the origin looking down +z and mesh coordinates
+//!   *are* camera coordinates — what `visage fuse` writes. A [`Pose`] maps world (mesh)
+//!   coordinates to camera coordinates: `x_cam = R · x + t`.
+//! - **Pixels**: `u` right, `v` down; the centre of pixel `(i, j)` is at `(i, j)`; a point
+//!   projects to `(fx·x/z + cx, fy·y/z + cy)` ([`visage_camera::Intrinsics::project`]).
+//! - **Coverage**: a pixel belongs to a triangle when its centre is inside the projected
+//!   triangle; centres exactly on an edge go to the triangle for which that edge is a top or left
+//!   edge (the top-left rule), so a closed mesh or a shared edge is covered exactly once —
+//!   no cracks, no double hits. Edge functions are `f64` and computed canonically per edge
+//!   ([`edge`]), so this holds bit-exactly.
+//! - **Depth**: per pixel, either the camera `z` or the distance along the unit ray
+//!   ([`visage_camera::DepthKind`]), in metres; `0` marks background. Nearest surface wins; ties
+//!   go to the lower triangle index.
+//! - **Transform chain** (Eq. (6.1)): `clip = P · F · [R t] · M · (v, 1)ᵀ` with `M` the model
+//!   matrix (object → world), `[R t]` the pose, `F = diag(1, −1, −1, 1)` the change to OpenGL eye
+//!   space and `P` the OpenGL projection built from `K` ([`projection_matrix`], ERRATA 12).
+//!   Clip-space `w` equals camera `z`. Triangles are clipped against the near and far planes
+//!   ([`clip`]); the side planes by rejection and scissoring.
+//! - **Orientation**: a triangle is front-facing when `(v₁ − v₀) × (v₂ − v₀)` points towards
+//!   the camera (counter-clockwise on screen). Both sides are drawn unless culling is asked for.
+//! - **Parallelism**: triangle set-up and scan conversion run on rayon's pool; scan conversion
+//!   is split into tiles of [`TILE_ROWS`] image rows, each owning its part of the z-buffer.
+//!
+//! # Entry points
+//! - [`render_depth`]: depth + triangle-id + barycentric buffers of a [`visage_mesh::TriMesh`]
+//!   for a camera with intrinsics and optional pose — the ground-truth renderer.
+//! - [`Renderer::render`]: Algorithm 3 — colour (Blinn–Phong, Eq. (6.4), textured by Eq. (6.3)),
+//!   depth, triangle-id and barycentric buffers into a caller-owned [`Frame`].
+//! - [`Rasterizer`]: reusable state for repeated frames; [`Rasterizer::fragment`] gives exact
+//!   per-pixel depth and barycentrics.
+
+pub mod camera;
+pub mod clip;
+pub mod color;
+pub mod depth;
+pub mod edge;
+mod error;
+mod frame;
+pub mod mat4;
+pub mod normals;
+pub mod pose;
+pub mod projection;
+pub mod projective;
+pub mod rasterize;
+pub mod shading;
+pub mod texture;
+pub mod turntable;
+mod validate;
+
+pub use camera::{Camera, DEFAULT_FAR, DEFAULT_NEAR};
+pub use color::write_srgb_png;
+pub use depth::{render_depth, render_depth_with, DepthRender};
+pub use error::RenderError;
+pub use frame::{Albedo, Frame, Renderer, Scene};
+pub use mat4::{Mat3, Mat4};
+pub use normals::{normal_matrix, vertex_normals};
+pub use pose::Pose;
+pub use projection::{projection_matrix, viewport};
+pub use projective::projective_uvs;
+pub use rasterize::{CullMode, Fragment, Rasterizer, ScreenTriangle, NO_TRIANGLE, TILE_ROWS};
+pub use shading::{blinn_phong, Light, Material, UNLIT};
+pub use texture::{Texture, Wrap};
+pub use turntable::turntable;

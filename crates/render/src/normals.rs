@@ -1,0 +1,85 @@
+//! Vertex normals and their transformation: Eq. (6.2).
+
+use crate::mat4::{cross, normalize, sub, Mat3};
+use crate::RenderError;
+
+/// The normal matrix `N = (A⁻¹)ᵀ` of the linear part `A` of a transform (Eq. (6.2)): if `t` is
+/// tangent to the surface and `n · t = 0`, then `(N n) · (A t) = 0`, also under non-uniform scaling
+/// where `A n` would not stay perpendicular.
+///
+/// # Errors
+/// `RenderError::Transform` when `A` is singular or not finite.
+pub fn normal_matrix(a: &Mat3) -> Result<Mat3, RenderError> {
+    a.inverse_transpose().ok_or_else(|| RenderError::Transform {
+        what: "model-view matrix",
+        reason: format!(
+            "its linear part is singular (det = {}), normals are undefined",
+            a.determinant()
+        ),
+    })
+}
+
+/// `ν = N n / ‖N n‖` (Eq. (6.2)); the zero vector stays zero.
+#[inline]
+pub fn transform_normal(n: &Mat3, normal: [f64; 3]) -> [f64; 3] {
+    normalize(n.mul_vec(normal))
+}
+
+/// Area-weighted vertex normals `n_i ∝ Σ_{T ∋ i} (v₁ − v₀) × (v₂ − v₀)`, unit length (zero for
+/// vertices of no or only degenerate triangles), #V × 3. Indices must be valid.
+///
+/// # Panics
+/// If a triangle index is out of range (callers validate meshes first).
+pub fn vertex_normals(vertices: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
+    let mut acc = vec![[0.0; 3]; vertices.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| vertices[i as usize]);
+        let n = cross(sub(b, a), sub(c, a));
+        for &i in t {
+            let s = &mut acc[i as usize];
+            s[0] += n[0];
+            s[1] += n[1];
+            s[2] += n[2];
+        }
+    }
+    acc.into_iter().map(normalize).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mat4::dot;
+
+    #[test]
+    fn normals_stay_perpendicular_under_non_uniform_scaling() {
+        // A sloped plane with tangents t1, t2 and normal n; scale x by 5, z by 0.2 and rotate.
+        let (t1, t2) = ([1.0, 0.0, 1.0], [0.0, 1.0, 0.5]);
+        let n = normalize(cross(t1, t2));
+        let a = Mat3::rotation([0.3, 1.0, -0.2], 0.7).mul(&Mat3::diagonal([5.0, 1.0, 0.2]));
+        let nm = normal_matrix(&a).unwrap();
+        let nu = transform_normal(&nm, n);
+        assert!((dot(nu, nu) - 1.0).abs() < 1e-14);
+        for t in [t1, t2] {
+            let ta = normalize(a.mul_vec(t));
+            assert!(dot(nu, ta).abs() < 1e-14, "ν ⟂ transformed tangent");
+        }
+        // The naive A·n is not perpendicular here: the test would catch using A instead of N.
+        let naive = normalize(a.mul_vec(n));
+        assert!(dot(naive, normalize(a.mul_vec(t1))).abs() > 1e-2);
+        assert!(normal_matrix(&Mat3::diagonal([1.0, 0.0, 1.0])).is_err());
+    }
+
+    #[test]
+    fn vertex_normals_of_a_plane_point_along_its_normal() {
+        let v = [
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [0.0, 1.0, 1.0],
+            [1.0, 1.0, 1.0],
+        ];
+        let n = vertex_normals(&v, &[[0, 1, 2], [1, 3, 2]]);
+        for x in n {
+            assert!((x[2] - 1.0).abs() < 1e-15);
+        }
+    }
+}

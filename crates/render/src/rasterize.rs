@@ -1,0 +1,377 @@
+//! Tile-parallel scan conversion with a z-buffer: steps 1–2, 5–7 and 10 of Algorithm 3.
+//!
+//! Pipeline per frame:
+//! 1. every vertex goes to camera space (`[R t]·M`) and clip space (`P·F`, Eq. (6.1));
+//! 2. every triangle is trivially rejected against the frustum or clipped against the near/far
+//!    planes ([`crate::clip`]), divided by `w`, mapped by the viewport, and set up as a
+//!    [`ScreenTriangle`] (edge functions, `1/w` at the corners, bounding box);
+//! 3. the set-ups are binned into horizontal tiles of [`TILE_ROWS`] image rows; tiles are
+//!    rasterised in parallel (rayon), each owning its slice of the z-buffer.
+//!
+//! The result is a *visibility buffer*: per pixel the camera `z` of the nearest surface and the
+//! set-up that produced it. Attributes (exact depth, barycentrics, normals, UVs) are reconstructed
+//! once per visible pixel afterwards ([`Rasterizer::fragment`]), so overdraw costs only the depth
+//! test. Depth ties are won by the lower triangle index, independently of the thread schedule.
+
+use rayon::prelude::*;
+
+use crate::camera::Camera;
+use crate::clip::{clip_triangle, far_distance, near_distance, ClipVertex};
+use crate::edge::{signed_area2, Edge};
+use crate::mat4::Mat4;
+use crate::projection::viewport;
+use crate::RenderError;
+
+/// Image rows per tile: the unit of parallel work and of z-buffer ownership.
+pub const TILE_ROWS: usize = 16;
+
+/// Triangles per parallel set-up task.
+const SETUP_CHUNK: usize = 2048;
+
+/// Index stored in the visibility buffer for background pixels.
+pub const NO_TRIANGLE: u32 = u32::MAX;
+
+/// Which triangles to discard by orientation.
+///
+/// A triangle `(v₀, v₁, v₂)` is *front-facing* when its normal `(v₁ − v₀) × (v₂ − v₀)` points
+/// towards the camera, i.e. it runs counter-clockwise on screen (the OpenGL default).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CullMode {
+    /// Draw every triangle (open meshes such as a reconstructed face are seen from both sides).
+    #[default]
+    None,
+    /// Discard triangles facing away from the camera.
+    Back,
+    /// Discard triangles facing the camera.
+    Front,
+}
+
+/// A triangle ready for scan conversion, in pixel coordinates, oriented so that its interior has
+/// `E > 0` on all three edges. One mesh triangle yields up to three of these after clipping.
+#[derive(Clone, Copy, Debug)]
+pub struct ScreenTriangle {
+    /// `edges[i]` is opposite corner `i`: `E_i(p) ∝ λ_i(p)`, the screen-space barycentric.
+    edges: [Edge; 3],
+    /// `1/w = 1/z_camera` at the corners.
+    inv_w: [f64; 3],
+    /// Barycentric coordinates of the corners in the original mesh triangle.
+    bary: [[f64; 3]; 3],
+    /// Inclusive pixel bounding box, already clamped to the image.
+    x0: i32,
+    x1: i32,
+    y0: i32,
+    y1: i32,
+    /// Index of the mesh triangle.
+    triangle: u32,
+    front_facing: bool,
+}
+
+/// A visible surface sample at a pixel centre.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fragment {
+    /// Index of the mesh triangle.
+    pub triangle: u32,
+    /// Camera-space depth `z` in metres, exact to `f64` rounding (interpolated as `1/z`, which is
+    /// affine in screen space).
+    pub z: f64,
+    /// Perspective-correct barycentric coordinates in the mesh triangle (sum to 1): the surface
+    /// point is `Σ bary[i] · v_i`.
+    pub bary: [f64; 3],
+    /// Whether the triangle faces the camera (see [`CullMode`]).
+    pub front_facing: bool,
+}
+
+/// Reusable rasteriser state: per-vertex transforms, triangle set-ups, tile bins and the
+/// visibility buffer. Create once, call [`Rasterizer::rasterize`] per frame (no allocation once
+/// the buffers have grown to the frame's size).
+#[derive(Debug, Default)]
+pub struct Rasterizer {
+    width: u32,
+    height: u32,
+    camera_positions: Vec<[f64; 3]>,
+    clip: Vec<[f64; 4]>,
+    setup_chunks: Vec<Vec<ScreenTriangle>>,
+    setups: Vec<ScreenTriangle>,
+    bins: Vec<Vec<u32>>,
+    depth: Vec<f32>,
+    index: Vec<u32>,
+}
+
+impl Rasterizer {
+    /// An empty rasteriser; buffers grow on first use.
+    pub fn new() -> Rasterizer {
+        Rasterizer::default()
+    }
+
+    /// Image width of the last frame, pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Image height of the last frame, pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Camera-space vertex positions of the last frame (`[R t] · M · v`, metres), #V × 3.
+    pub fn camera_positions(&self) -> &[[f64; 3]] {
+        &self.camera_positions
+    }
+
+    /// Rasterises `triangles` over `positions` (object space, #V × 3) seen through `camera`
+    /// after the model transform `model` (object → world, an affine 4×4 `M_k` of Eq. (6.1)).
+    ///
+    /// # Errors
+    /// A triangle index out of range, a non-finite position, a non-affine or non-finite `model`,
+    /// an invalid camera. Nothing panics on bad input.
+    pub fn rasterize(
+        &mut self,
+        positions: &[[f64; 3]],
+        triangles: &[[u32; 3]],
+        model: &Mat4,
+        camera: &Camera,
+        cull: CullMode,
+    ) -> Result<(), RenderError> {
+        camera.validate()?;
+        if !model.is_finite_affine() {
+            return Err(RenderError::Transform {
+                what: "model matrix",
+                reason: format!("not a finite affine matrix: {model:?}"),
+            });
+        }
+        crate::validate::check_positions(positions)?;
+        crate::validate::check_triangles(triangles, positions.len())?;
+
+        let k = &camera.intrinsics;
+        let (width, height) = (k.width, k.height);
+        self.width = width;
+        self.height = height;
+
+        // Step 1–2 of Algorithm 3: per-vertex transforms.
+        let model_view = camera.pose.matrix().mul(model);
+        let to_clip = camera.camera_to_clip();
+        self.camera_positions.resize(positions.len(), [0.0; 3]);
+        self.clip.resize(positions.len(), [0.0; 4]);
+        positions
+            .par_iter()
+            .zip(self.camera_positions.par_iter_mut())
+            .zip(self.clip.par_iter_mut())
+            .with_min_len(4096)
+            .for_each(|((p, cam), clip)| {
+                *cam = model_view.transform_point(*p);
+                *clip = to_clip.transform_point4(*cam);
+            });
+
+        // Triangle set-up, in parallel over chunks; chunk order keeps triangle order.
+        let n_chunks = triangles.len().div_ceil(SETUP_CHUNK);
+        self.setup_chunks.resize_with(n_chunks, Vec::new);
+        let clip = &self.clip;
+        triangles
+            .par_chunks(SETUP_CHUNK)
+            .zip(self.setup_chunks.par_iter_mut())
+            .enumerate()
+            .for_each(|(c, (chunk, out))| {
+                out.clear();
+                for (i, t) in chunk.iter().enumerate() {
+                    let id = (c * SETUP_CHUNK + i) as u32;
+                    setup_triangle(clip, *t, id, width, height, cull, out);
+                }
+            });
+        self.setups.clear();
+        for chunk in &self.setup_chunks {
+            self.setups.extend_from_slice(chunk);
+        }
+
+        // Binning into row tiles.
+        let n_tiles = (height as usize).div_ceil(TILE_ROWS);
+        self.bins.resize_with(n_tiles, Vec::new);
+        self.bins.iter_mut().for_each(Vec::clear);
+        for (s, st) in self.setups.iter().enumerate() {
+            for tile in st.y0 as usize / TILE_ROWS..=st.y1 as usize / TILE_ROWS {
+                self.bins[tile].push(s as u32);
+            }
+        }
+
+        // Tile-parallel scan conversion with depth test.
+        let n_pixels = width as usize * height as usize;
+        self.depth.resize(n_pixels, f32::INFINITY);
+        self.index.resize(n_pixels, NO_TRIANGLE);
+        let tile_len = TILE_ROWS * width as usize;
+        let (setups, bins) = (&self.setups, &self.bins);
+        self.depth
+            .par_chunks_mut(tile_len)
+            .zip(self.index.par_chunks_mut(tile_len))
+            .enumerate()
+            .for_each(|(tile, (depth, index))| {
+                depth.fill(f32::INFINITY);
+                index.fill(NO_TRIANGLE);
+                let row0 = (tile * TILE_ROWS) as i32;
+                let row1 = row0 + (depth.len() / width as usize) as i32 - 1;
+                for &s in &bins[tile] {
+                    let st = &setups[s as usize];
+                    scan(st, row0.max(st.y0), row1.min(st.y1), |x, y, z| {
+                        let p = (y - row0) as usize * width as usize + x as usize;
+                        if z < depth[p] {
+                            depth[p] = z;
+                            index[p] = s;
+                        }
+                    });
+                }
+            });
+        Ok(())
+    }
+
+    /// The visible fragment at pixel `(x, y)`, or `None` for background or outside the image.
+    pub fn fragment(&self, x: u32, y: u32) -> Option<Fragment> {
+        if x >= self.width || y >= self.height {
+            return None;
+        }
+        let s = *self
+            .index
+            .get(y as usize * self.width as usize + x as usize)?;
+        let st = self.setups.get(s as usize)?;
+        Some(st.fragment(x as f64, y as f64))
+    }
+
+    /// The set-ups of the last frame, in triangle order (for coverage tests and custom passes).
+    pub fn screen_triangles(&self) -> &[ScreenTriangle] {
+        &self.setups
+    }
+}
+
+impl ScreenTriangle {
+    /// Index of the mesh triangle this set-up came from.
+    pub fn triangle(&self) -> u32 {
+        self.triangle
+    }
+
+    /// Calls `f(x, y)` for every pixel centre the triangle covers under the fill rule, without
+    /// depth test.
+    pub fn for_each_pixel(&self, mut f: impl FnMut(u32, u32)) {
+        scan(self, self.y0, self.y1, |x, y, _| f(x as u32, y as u32));
+    }
+
+    /// Perspective-correct reconstruction at pixel centre `(x, y)` (assumed covered).
+    fn fragment(&self, x: f64, y: f64) -> Fragment {
+        let e: [f64; 3] = std::array::from_fn(|i| self.edges[i].eval(self.edges[i].row(y), x));
+        let sum = e[0] + e[1] + e[2];
+        let q: [f64; 3] = std::array::from_fn(|i| e[i] / sum * self.inv_w[i]);
+        let s = q[0] + q[1] + q[2];
+        let w: [f64; 3] = std::array::from_fn(|i| q[i] / s);
+        let bary = std::array::from_fn(|j| {
+            w[0] * self.bary[0][j] + w[1] * self.bary[1][j] + w[2] * self.bary[2][j]
+        });
+        Fragment {
+            triangle: self.triangle,
+            z: 1.0 / s,
+            bary,
+            front_facing: self.front_facing,
+        }
+    }
+}
+
+/// Scan-converts rows `y0..=y1` of `st`, calling `f(x, y, z)` with the camera depth as `f32`.
+#[inline]
+fn scan(st: &ScreenTriangle, y0: i32, y1: i32, mut f: impl FnMut(i32, i32, f32)) {
+    let [e0, e1, e2] = &st.edges;
+    let [w0, w1, w2] = st.inv_w;
+    for y in y0..=y1 {
+        let yf = y as f64;
+        let (r0, r1, r2) = (e0.row(yf), e1.row(yf), e2.row(yf));
+        for x in st.x0..=st.x1 {
+            let xf = x as f64;
+            let (a, b, c) = (e0.eval(r0, xf), e1.eval(r1, xf), e2.eval(r2, xf));
+            if e0.inside(a) && e1.inside(b) && e2.inside(c) {
+                let z = (a + b + c) / (a * w0 + b * w1 + c * w2);
+                f(x, y, z as f32);
+            }
+        }
+    }
+}
+
+/// Clips, projects and sets up mesh triangle `t` (index `id`), appending 0–3 screen triangles.
+fn setup_triangle(
+    clip: &[[f64; 4]],
+    t: [u32; 3],
+    id: u32,
+    width: u32,
+    height: u32,
+    cull: CullMode,
+    out: &mut Vec<ScreenTriangle>,
+) {
+    let c = t.map(|i| clip[i as usize]);
+    // Trivial rejection: all corners outside one frustum plane (valid in homogeneous space).
+    let outside = |f: &dyn Fn([f64; 4]) -> f64| c.iter().all(|&v| f(v) < 0.0);
+    if outside(&|v| v[3] - v[0])
+        || outside(&|v| v[3] + v[0])
+        || outside(&|v| v[3] - v[1])
+        || outside(&|v| v[3] + v[1])
+        || outside(&near_distance)
+        || outside(&far_distance)
+    {
+        return;
+    }
+    let corner = |k: usize| {
+        let mut bary = [0.0; 3];
+        bary[k] = 1.0;
+        ClipVertex { clip: c[k], bary }
+    };
+    let poly = clip_triangle([corner(0), corner(1), corner(2)]);
+    let vs = poly.vertices();
+    if vs.len() < 3 {
+        return;
+    }
+    let to_screen = |v: &ClipVertex| {
+        let inv_w = 1.0 / v.clip[3];
+        let px = viewport(width, height, [v.clip[0] * inv_w, v.clip[1] * inv_w]);
+        (px, inv_w)
+    };
+    let first = to_screen(&vs[0]);
+    for i in 1..vs.len() - 1 {
+        let (p1, p2) = (to_screen(&vs[i]), to_screen(&vs[i + 1]));
+        let mut p = [first.0, p1.0, p2.0];
+        let mut inv_w = [first.1, p1.1, p2.1];
+        let mut bary = [vs[0].bary, vs[i].bary, vs[i + 1].bary];
+        let area = signed_area2(&p);
+        if !(area.is_finite() && area != 0.0) {
+            continue;
+        }
+        let front_facing = area < 0.0;
+        match cull {
+            CullMode::Back if !front_facing => continue,
+            CullMode::Front if front_facing => continue,
+            _ => {}
+        }
+        if area < 0.0 {
+            p.swap(1, 2);
+            inv_w.swap(1, 2);
+            bary.swap(1, 2);
+        }
+        let xmin = p[0][0].min(p[1][0]).min(p[2][0]);
+        let xmax = p[0][0].max(p[1][0]).max(p[2][0]);
+        let ymin = p[0][1].min(p[1][1]).min(p[2][1]);
+        let ymax = p[0][1].max(p[1][1]).max(p[2][1]);
+        let x0 = xmin.ceil().max(0.0);
+        let x1 = xmax.floor().min(width as f64 - 1.0);
+        let y0 = ymin.ceil().max(0.0);
+        let y1 = ymax.floor().min(height as f64 - 1.0);
+        if !(x0 <= x1 && y0 <= y1) {
+            continue;
+        }
+        out.push(ScreenTriangle {
+            edges: [
+                Edge::new(p[1], p[2]),
+                Edge::new(p[2], p[0]),
+                Edge::new(p[0], p[1]),
+            ],
+            inv_w,
+            bary,
+            x0: x0 as i32,
+            x1: x1 as i32,
+            y0: y0 as i32,
+            y1: y1 as i32,
+            triangle: id,
+            front_facing,
+        });
+    }
+}

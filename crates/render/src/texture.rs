@@ -1,0 +1,177 @@
+//! Texture images and bilinear sampling: Eq. (6.3).
+
+use std::path::Path;
+
+use crate::color::srgb_to_linear_u8;
+use crate::RenderError;
+
+/// What happens to texture coordinates outside `[0, 1]`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Wrap {
+    /// Use the nearest border texel (what projective texturing wants at the frame border).
+    #[default]
+    Clamp,
+    /// Tile the texture (`u` and `u + 1` sample the same texel).
+    Repeat,
+}
+
+/// An RGBA texture `Υ: [0, 1]² → [0, 1]⁴`, linear (not sRGB) values, `width × height` texels,
+/// row-major with row 0 at the **top** of the image.
+///
+/// Texture coordinates follow OBJ/OpenGL: `u` to the right, `v` **up**, so `v = 0` is the bottom
+/// row; the centre of texel `(i, j)` (column `i`, row `j` from the top) sits at
+/// `((i + ½)/W, 1 − (j + ½)/H)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    width: u32,
+    height: u32,
+    texels: Vec<[f32; 4]>,
+}
+
+impl Texture {
+    /// A texture from linear RGBA texels (`width · height` of them, row 0 at the top).
+    ///
+    /// # Errors
+    /// A zero size or a texel count that does not match.
+    pub fn new(width: u32, height: u32, texels: Vec<[f32; 4]>) -> Result<Texture, RenderError> {
+        if width == 0 || height == 0 || texels.len() != width as usize * height as usize {
+            return Err(RenderError::Parameter {
+                field: "texture texel count",
+                value: texels.len() as f64,
+                reason: "must equal width · height > 0",
+            });
+        }
+        Ok(Texture {
+            width,
+            height,
+            texels,
+        })
+    }
+
+    /// Loads a PNG or JPEG image; its 8-bit values are taken as sRGB and converted to linear.
+    /// Errors name the file.
+    pub fn load(path: &Path) -> Result<Texture, RenderError> {
+        let img = image::open(path).map_err(|e| RenderError::File {
+            path: path.to_owned(),
+            reason: format!("cannot read texture image: {e}"),
+        })?;
+        Ok(Texture::from_rgba8(&img.to_rgba8()))
+    }
+
+    /// A texture from an 8-bit sRGB image (alpha kept linear).
+    pub fn from_rgba8(img: &image::RgbaImage) -> Texture {
+        let texels = img
+            .pixels()
+            .map(|p| {
+                let [r, g, b, a] = p.0;
+                [
+                    srgb_to_linear_u8(r),
+                    srgb_to_linear_u8(g),
+                    srgb_to_linear_u8(b),
+                    a as f32 / 255.0,
+                ]
+            })
+            .collect();
+        Texture {
+            width: img.width(),
+            height: img.height(),
+            texels,
+        }
+    }
+
+    /// Width in texels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in texels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// The texel in column `i`, row `j` (from the top), with wrapping applied to the indices.
+    #[inline]
+    pub fn texel(&self, i: i64, j: i64, wrap: Wrap) -> [f32; 4] {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let (i, j) = match wrap {
+            Wrap::Clamp => (i.clamp(0, w - 1), j.clamp(0, h - 1)),
+            Wrap::Repeat => (i.rem_euclid(w), j.rem_euclid(h)),
+        };
+        self.texels[(j * w + i) as usize]
+    }
+
+    /// Bilinear sample `C_tex` at texture coordinates `uv` (Eq. (6.3)).
+    ///
+    /// The four taps are the texel centres around `uv`, i.e. `uv ± δ` with `δ = 1/(2N)` per
+    /// axis, weighted by `w_pq` (products of the fractional distances, `Σ w_pq = 1`). Exactly
+    /// at a texel centre the sample is that texel. Non-finite coordinates (a vertex behind the
+    /// camera in projective texturing) give transparent black.
+    #[inline]
+    pub fn sample(&self, uv: [f64; 2], wrap: Wrap) -> [f32; 4] {
+        if !(uv[0].is_finite() && uv[1].is_finite()) {
+            return [0.0; 4];
+        }
+        let x = uv[0] * self.width as f64 - 0.5;
+        let y = (1.0 - uv[1]) * self.height as f64 - 0.5;
+        // Clamp far-away coordinates before the integer conversion; beyond ±2³⁰ texels any
+        // wrap mode has long saturated or repeated.
+        let (x, y) = (x.clamp(-1e9, 1e9), y.clamp(-1e9, 1e9));
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
+        let (i, j) = (x0 as i64, y0 as i64);
+        let t00 = self.texel(i, j, wrap);
+        let t10 = self.texel(i + 1, j, wrap);
+        let t01 = self.texel(i, j + 1, wrap);
+        let t11 = self.texel(i + 1, j + 1, wrap);
+        let (w00, w10, w01, w11) = (
+            (1.0 - fx) * (1.0 - fy),
+            fx * (1.0 - fy),
+            (1.0 - fx) * fy,
+            fx * fy,
+        );
+        std::array::from_fn(|c| w00 * t00[c] + w10 * t10[c] + w01 * t01[c] + w11 * t11[c])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp() -> Texture {
+        // 4×2 texels, red = column, green = row.
+        let texels = (0..8)
+            .map(|k| [(k % 4) as f32, (k / 4) as f32, 0.0, 1.0])
+            .collect();
+        Texture::new(4, 2, texels).unwrap()
+    }
+
+    #[test]
+    fn texel_centres_are_exact_and_midpoints_average() {
+        let t = ramp();
+        // Centre of texel (2, 1): u = 2.5/4, v = 1 − 1.5/2.
+        assert_eq!(
+            t.sample([2.5 / 4.0, 0.25], Wrap::Clamp),
+            [2.0, 1.0, 0.0, 1.0]
+        );
+        // Half-way between columns 1 and 2 and between rows 0 and 1.
+        let s = t.sample([0.5, 0.5], Wrap::Clamp);
+        assert!((s[0] - 1.5).abs() < 1e-6 && (s[1] - 0.5).abs() < 1e-6);
+        // Bilinear is affine inside a cell: the red ramp is linear in u.
+        let s = t.sample([0.3, 0.75], Wrap::Clamp);
+        assert!((s[0] - (0.3 * 4.0 - 0.5) as f32).abs() < 1e-5);
+    }
+
+    #[test]
+    fn clamp_and_repeat_differ_outside_the_unit_square() {
+        let t = ramp();
+        assert_eq!(t.sample([-3.0, 0.75], Wrap::Clamp)[0], 0.0);
+        let a = t.sample([0.125 + 1.0, 0.75], Wrap::Repeat);
+        let b = t.sample([0.125, 0.75], Wrap::Repeat);
+        assert_eq!(a, b);
+        // Between the last and the first column, repeat blends them, clamp does not.
+        assert!((t.sample([1.0, 0.75], Wrap::Repeat)[0] - 1.5).abs() < 1e-6);
+        assert_eq!(t.sample([1.0, 0.75], Wrap::Clamp)[0], 3.0);
+        assert_eq!(t.sample([f64::NAN, 0.5], Wrap::Clamp), [0.0; 4]);
+        assert!(Texture::new(2, 2, vec![[0.0; 4]; 3]).is_err());
+    }
+}
