@@ -57,7 +57,7 @@ fn steep_plane_depth_is_exact_in_z_and_ray_kinds() {
             let p = [z * d[0] - o[0], z * d[1] - o[1], z * d[2] - o[2]];
             let (s, t) = (dot(p, a) / dot(a, a) + 0.5, dot(p, b) / dot(b, b) + 0.5);
             let inside = s > 1e-6 && s < 1.0 - 1e-6 && t > 1e-6 && t < 1.0 - 1e-6;
-            let outside = s < -1e-6 || s > 1.0 + 1e-6 || t < -1e-6 || t > 1.0 + 1e-6;
+            let outside = !(-1e-6..=1.0 + 1e-6).contains(&s) || !(-1e-6..=1.0 + 1e-6).contains(&t);
             let idx = (v * k.width + u) as usize;
             let got = z_render.depth.data[idx] as f64;
             if inside {

@@ -1,5 +1,50 @@
 //! Mesh readers and writers (PLY, OBJ) shared by every stage of visage.
+//!
+//! Both formats keep positions in the file's units (visage writes metres in camera
+//! coordinates); colours in files are sRGB-encoded, in [`crate::TriMesh`] linear. Errors name the
+//! file and the offending line (OBJ, PLY header, ASCII PLY) or element (binary PLY); malformed
+//! input never panics.
 
+mod color;
+mod error;
+mod obj;
 mod ply;
 
-pub use ply::{write_ply, MeshIoError};
+pub use error::MeshIoError;
+pub use obj::{read_obj, write_obj};
+pub use ply::{read_ply, write_ply, write_ply_with, PlyFormat, MAX_POLYGON_CORNERS};
+
+use std::path::Path;
+
+/// Reads a mesh by file extension: `.obj` or `.ply` (case-insensitive).
+///
+/// # Errors
+/// As [`read_obj`] / [`read_ply`]; an unknown extension is a `Syntax` error on line 0.
+pub fn read_mesh(path: &Path) -> Result<crate::TriMesh, MeshIoError> {
+    match extension(path).as_deref() {
+        Some("obj") => read_obj(path),
+        Some("ply") => read_ply(path),
+        other => Err(MeshIoError::Syntax {
+            path: path.to_owned(),
+            line: 0,
+            reason: format!("unknown mesh format {other:?}: expected a .obj or .ply file"),
+        }),
+    }
+}
+
+/// Writes a mesh by file extension: `.obj` or `.ply` (binary little-endian).
+pub fn write_mesh(path: &Path, mesh: &crate::TriMesh) -> Result<(), MeshIoError> {
+    match extension(path).as_deref() {
+        Some("obj") => write_obj(path, mesh),
+        Some("ply") => write_ply(path, mesh),
+        other => Err(MeshIoError::Unwritable {
+            path: path.to_owned(),
+            reason: format!("unknown mesh format {other:?}: expected a .obj or .ply file"),
+        }),
+    }
+}
+
+fn extension(path: &Path) -> Option<String> {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+}
