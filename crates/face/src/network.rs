@@ -7,7 +7,7 @@
 //! channel-contiguous inner loops and runs the hand-written kernels of [`crate::ops`].
 
 use crate::float16::f16_slice_to_f32;
-use crate::ops::{self, Conv2dWeights, Window};
+use crate::ops::{self, Conv2dWeights, Fused, Madd, Plain, Window};
 use crate::tflite::{OpCode, TensorType, TfliteModel};
 use crate::FaceError;
 
@@ -69,8 +69,13 @@ enum Step {
 #[derive(Clone, Debug)]
 pub struct Network {
     steps: Vec<Step>,
-    /// One buffer per tensor of the graph (empty for constants).
+    /// Activation buffers ("slots"), shared by tensors whose lifetimes do not overlap so that
+    /// the working set stays in cache.
     values: Vec<Vec<f32>>,
+    /// Slot of each tensor (meaningful for computed tensors only).
+    slot_of: Vec<usize>,
+    /// Number of values of each tensor.
+    len_of: Vec<usize>,
     shapes: Vec<Vec<usize>>,
     names: Vec<String>,
     input: usize,
@@ -142,6 +147,9 @@ impl Network {
                 TensorType::Other(_) => {}
             }
         }
+        let Some(&input) = model.inputs.first() else {
+            return Err(err(name, "no graph input".into()));
+        };
         let mut steps = Vec::new();
         let mut produced = vec![false; n];
         for &i in &model.inputs {
@@ -346,9 +354,6 @@ impl Network {
             produced[y] = true;
             steps.push(step);
         }
-        let Some(&input) = model.inputs.first() else {
-            return Err(err(name, "no graph input".into()));
-        };
         for &o in &model.outputs {
             if !produced[o] {
                 return Err(err(
@@ -357,19 +362,13 @@ impl Network {
                 ));
             }
         }
-        let values = (0..n)
-            .map(|i| {
-                if produced[i] {
-                    vec![0.0; shapes[i].iter().product()]
-                } else {
-                    Vec::new()
-                }
-            })
-            .collect();
+        let len_of: Vec<usize> = shapes.iter().map(|s| s.iter().product()).collect();
+        let (slot_of, slot_len) = allocate_slots(&steps, &len_of, input, &model.outputs);
+        let values = slot_len.iter().map(|&l| vec![0.0; l]).collect();
         let scratch_len = steps
             .iter()
             .map(|s| match s {
-                Step::Conv { win, wts, .. } => win.k_h * win.k_w * wts.c_in,
+                Step::Conv { win, wts, .. } => ops::CONV_ROWS * win.k_h * win.k_w * wts.c_in,
                 _ => 0,
             })
             .max()
@@ -377,6 +376,8 @@ impl Network {
         Ok(Network {
             steps,
             values,
+            slot_of,
+            len_of,
             shapes,
             names: model.tensors.iter().map(|t| t.name.clone()).collect(),
             input,
@@ -397,67 +398,93 @@ impl Network {
 
     /// Mutable access to the input tensor (NHWC, f32) to fill it in place before [`Network::run`].
     pub fn input_mut(&mut self) -> &mut [f32] {
-        &mut self.values[self.input]
+        &mut self.values[self.slot_of[self.input]][..self.len_of[self.input]]
     }
 
     /// Runs the graph on the current input tensor.
+    ///
+    /// On x86-64 CPUs with AVX2 the same kernels are compiled a second time for 256-bit vectors
+    /// and chosen at run time; results agree to float rounding.
     pub fn run(&mut self) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU supports AVX2 and FMA (checked just above).
+            unsafe { self.run_avx2_fma() };
+            return;
+        }
+        self.run_steps::<Plain>();
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn run_avx2_fma(&mut self) {
+        self.run_steps::<Fused>();
+    }
+
+    #[inline(always)]
+    fn run_steps<M: Madd>(&mut self) {
         for step in &self.steps {
             let values = &mut self.values;
+            let (slot, len) = (&self.slot_of, &self.len_of);
+            macro_rules! with_out {
+                ($y:expr, |$out:ident| $e:expr) => {{
+                    let mut buf = std::mem::take(&mut values[slot[$y]]);
+                    {
+                        let $out = &mut buf[..len[$y]];
+                        $e;
+                    }
+                    values[slot[$y]] = buf;
+                }};
+            }
+            macro_rules! get {
+                ($t:expr) => {
+                    &values[slot[$t]][..len[$t]]
+                };
+            }
             match step {
                 Step::Conv { x, y, win, wts } => {
-                    let mut out = std::mem::take(&mut values[*y]);
-                    ops::conv2d(&values[*x], win, wts, &mut self.scratch, &mut out);
-                    values[*y] = out;
+                    with_out!(*y, |out| ops::conv2d::<M>(
+                        get!(*x),
+                        win,
+                        wts,
+                        &mut self.scratch,
+                        out
+                    ))
                 }
                 Step::Depthwise { x, y, win, c, w, b } => {
-                    let mut out = std::mem::take(&mut values[*y]);
-                    ops::depthwise_conv2d(&values[*x], win, *c, w, b, &mut out);
-                    values[*y] = out;
+                    with_out!(*y, |out| ops::depthwise_conv2d::<M>(
+                        get!(*x),
+                        win,
+                        *c,
+                        w,
+                        b,
+                        out
+                    ))
                 }
                 Step::Prelu { x, y, alpha } => {
-                    let mut out = std::mem::take(&mut values[*y]);
-                    ops::prelu(&values[*x], alpha, &mut out);
-                    values[*y] = out;
+                    with_out!(*y, |out| ops::prelu(get!(*x), alpha, out))
                 }
-                Step::Relu { x, y } => {
-                    let mut out = std::mem::take(&mut values[*y]);
-                    ops::relu(&values[*x], &mut out);
-                    values[*y] = out;
-                }
-                Step::Add { a, b, y } => {
-                    let mut out = std::mem::take(&mut values[*y]);
-                    ops::add(&values[*a], &values[*b], &mut out);
-                    values[*y] = out;
-                }
+                Step::Relu { x, y } => with_out!(*y, |out| ops::relu(get!(*x), out)),
+                Step::Add { a, b, y } => with_out!(*y, |out| ops::add(get!(*a), get!(*b), out)),
                 Step::MaxPool { x, y, win, c } => {
-                    let mut out = std::mem::take(&mut values[*y]);
-                    ops::max_pool2d(&values[*x], win, *c, &mut out);
-                    values[*y] = out;
+                    with_out!(*y, |out| ops::max_pool2d(get!(*x), win, *c, out))
                 }
                 Step::Pad { x, y, shape, pads } => {
-                    let mut out = std::mem::take(&mut values[*y]);
-                    ops::pad4(&values[*x], *shape, *pads, &mut out);
-                    values[*y] = out;
+                    with_out!(*y, |out| ops::pad4(get!(*x), *shape, *pads, out))
                 }
-                Step::Copy { x, y } => {
-                    let mut out = std::mem::take(&mut values[*y]);
-                    out.copy_from_slice(&values[*x]);
-                    values[*y] = out;
-                }
-                Step::Concat { xs, y, outer } => {
-                    let mut out = std::mem::take(&mut values[*y]);
+                Step::Copy { x, y } => with_out!(*y, |out| out.copy_from_slice(get!(*x))),
+                Step::Concat { xs, y, outer } => with_out!(*y, |out| {
                     let mut pos = 0;
                     for o in 0..*outer {
                         for &t in xs {
-                            let chunk = values[t].len() / outer;
+                            let chunk = len[t] / outer;
                             out[pos..pos + chunk]
-                                .copy_from_slice(&values[t][o * chunk..(o + 1) * chunk]);
+                                .copy_from_slice(&get!(t)[o * chunk..(o + 1) * chunk]);
                             pos += chunk;
                         }
                     }
-                    values[*y] = out;
-                }
+                }),
             }
         }
     }
@@ -465,7 +492,10 @@ impl Network {
     /// Output `k` (in the model's output order) after [`Network::run`], with its tensor name.
     pub fn output(&self, k: usize) -> Option<(&str, &[f32])> {
         let &t = self.outputs.get(k)?;
-        Some((&self.names[t], &self.values[t]))
+        Some((
+            &self.names[t],
+            &self.values[self.slot_of[t]][..self.len_of[t]],
+        ))
     }
 
     /// Output tensor by name, e.g. `"conv2d_21"`.
@@ -473,7 +503,7 @@ impl Network {
         self.outputs
             .iter()
             .find(|&&t| self.names[t] == name)
-            .map(|&t| self.values[t].as_slice())
+            .map(|&t| &self.values[self.slot_of[t]][..self.len_of[t]])
     }
 }
 
@@ -490,4 +520,68 @@ fn check_out(
             hwc[0], hwc[1], hwc[2]
         )))
     }
+}
+
+/// Tensors read and written by a step.
+fn step_io(step: &Step) -> (Vec<usize>, usize) {
+    match step {
+        Step::Conv { x, y, .. }
+        | Step::Depthwise { x, y, .. }
+        | Step::Prelu { x, y, .. }
+        | Step::Relu { x, y }
+        | Step::MaxPool { x, y, .. }
+        | Step::Pad { x, y, .. }
+        | Step::Copy { x, y } => (vec![*x], *y),
+        Step::Add { a, b, y } => (vec![*a, *b], *y),
+        Step::Concat { xs, y, .. } => (xs.clone(), *y),
+    }
+}
+
+/// Liveness-based buffer sharing: each computed tensor gets a slot that no tensor alive at the
+/// same time uses (best fit among the free slots, grown when needed). The graph input and
+/// outputs keep their slots for the whole run. Returns the slot of each tensor and each slot's
+/// length.
+fn allocate_slots(
+    steps: &[Step],
+    len_of: &[usize],
+    input: usize,
+    outputs: &[usize],
+) -> (Vec<usize>, Vec<usize>) {
+    let n = len_of.len();
+    let mut last_use = vec![0usize; n];
+    for (k, step) in steps.iter().enumerate() {
+        for t in step_io(step).0 {
+            last_use[t] = k;
+        }
+    }
+    let pinned = |t: usize| t == input || outputs.contains(&t);
+    let mut slot_of = vec![0usize; n];
+    let mut slot_len = vec![len_of[input]];
+    let mut free: Vec<usize> = Vec::new();
+    for (k, step) in steps.iter().enumerate() {
+        let (reads, y) = step_io(step);
+        let need = len_of[y];
+        let best = free
+            .iter()
+            .enumerate()
+            .filter(|&(_, &s)| slot_len[s] >= need)
+            .min_by_key(|&(_, &s)| slot_len[s])
+            .map(|(i, _)| i)
+            .or_else(|| (!free.is_empty()).then(|| free.len() - 1));
+        let s = match best {
+            Some(i) => free.swap_remove(i),
+            None => {
+                slot_len.push(0);
+                slot_len.len() - 1
+            }
+        };
+        slot_len[s] = slot_len[s].max(need);
+        slot_of[y] = s;
+        for t in reads {
+            if last_use[t] == k && !pinned(t) && !free.contains(&slot_of[t]) {
+                free.push(slot_of[t]);
+            }
+        }
+    }
+    (slot_of, slot_len)
 }

@@ -1,4 +1,4 @@
-use super::Window;
+use super::{Madd, Window};
 
 /// Convolution weights re-laid out for the NHWC kernel: `w[(ky·k_w + kx)·C_in + ci][co]`
 /// (the reduction index outer, output channels contiguous), plus the bias `[C_out]`.
@@ -40,94 +40,135 @@ impl Conv2dWeights {
 /// x[oy·s + ky − pad, ox·s + kx − pad, ci]` (zero outside the input), as TFLite's `CONV_2D`.
 ///
 /// `x` is `[in_h, in_w, C_in]`, `y` is `[out_h, out_w, C_out]`; `patch` is scratch of
-/// `k_h·k_w·C_in` values. A 1×1 stride-1 convolution is a GEMM and reads `x` in place.
+/// `4·k_h·k_w·C_in` values. A 1×1 stride-1 convolution is a GEMM and reads `x` in place.
 ///
 /// # Panics
 /// If a slice length does not match the window and weights.
 #[track_caller]
-pub fn conv2d(x: &[f32], win: &Window, wts: &Conv2dWeights, patch: &mut [f32], y: &mut [f32]) {
+#[inline(always)]
+pub fn conv2d<M: Madd>(
+    x: &[f32],
+    win: &Window,
+    wts: &Conv2dWeights,
+    patch: &mut [f32],
+    y: &mut [f32],
+) {
     let (ci, co) = (wts.c_in, wts.c_out);
     let red = win.k_h * win.k_w * ci;
     assert_eq!(x.len(), win.in_h * win.in_w * ci, "conv2d input size");
     assert_eq!(y.len(), win.out_h * win.out_w * co, "conv2d output size");
-    assert!(patch.len() >= red, "conv2d scratch too small");
+    assert!(patch.len() >= ROWS * red, "conv2d scratch too small");
     let pointwise = win.k_h == 1 && win.k_w == 1 && win.stride_h == 1 && win.stride_w == 1;
     if pointwise {
-        // Four pixels at a time: every weight row is loaded once per four outputs.
-        let mut rows = y.chunks_exact_mut(4 * co);
-        let mut inputs = x.chunks_exact(4 * ci);
+        // A GEMM `[pixels, C_in] × [C_in, C_out]`, ROWS pixels at a time.
+        let mut rows = y.chunks_exact_mut(ROWS * co);
+        let mut inputs = x.chunks_exact(ROWS * ci);
         for (yb, xb) in (&mut rows).zip(&mut inputs) {
-            gemv4(xb, &wts.w, &wts.bias, ci, co, yb);
+            gemm_rows::<M, ROWS>(xb, red, &wts.w, &wts.bias, yb);
         }
         for (yr, xr) in rows
             .into_remainder()
             .chunks_exact_mut(co)
             .zip(inputs.remainder().chunks_exact(ci))
         {
-            gemv(xr, &wts.w, &wts.bias, yr);
+            gemm_rows::<M, 1>(xr, red, &wts.w, &wts.bias, yr);
         }
         return;
     }
-    let patch = &mut patch[..red];
-    for oy in 0..win.out_h {
-        for ox in 0..win.out_w {
+    // im2col, ROWS output pixels at a time, then the same GEMM micro-kernel.
+    let pixels = win.out_h * win.out_w;
+    let mut first = 0;
+    while first < pixels {
+        let n = ROWS.min(pixels - first);
+        for r in 0..n {
+            let (oy, ox) = ((first + r) / win.out_w, (first + r) % win.out_w);
+            let dst = &mut patch[r * red..(r + 1) * red];
             let mut p = 0;
             for ky in 0..win.k_h {
                 let iy = Window::tap(oy, win.stride_h, ky, win.pad_top, win.in_h);
                 for kx in 0..win.k_w {
                     let ix = Window::tap(ox, win.stride_w, kx, win.pad_left, win.in_w);
-                    let dst = &mut patch[p..p + ci];
+                    let d = &mut dst[p..p + ci];
                     match (iy, ix) {
                         (Some(iy), Some(ix)) => {
-                            dst.copy_from_slice(&x[(iy * win.in_w + ix) * ci..][..ci])
+                            d.copy_from_slice(&x[(iy * win.in_w + ix) * ci..][..ci])
                         }
-                        _ => dst.fill(0.0),
+                        _ => d.fill(0.0),
                     }
                     p += ci;
                 }
             }
-            let o = (oy * win.out_w + ox) * co;
-            gemv(patch, &wts.w, &wts.bias, &mut y[o..o + co]);
         }
+        let out = &mut y[first * co..(first + n) * co];
+        if n == ROWS {
+            gemm_rows::<M, ROWS>(&patch[..ROWS * red], red, &wts.w, &wts.bias, out);
+        } else {
+            for r in 0..n {
+                gemm_rows::<M, 1>(
+                    &patch[r * red..(r + 1) * red],
+                    red,
+                    &wts.w,
+                    &wts.bias,
+                    &mut out[r * co..(r + 1) * co],
+                );
+            }
+        }
+        first += n;
     }
 }
 
-/// `y = b + Σ_r a[r] · w[r, :]` with `w` row-major `[len(a), len(y)]`.
+/// Pixels per micro-kernel call.
+pub const ROWS: usize = 4;
+
+/// `y[p, :] = b + Σ_r a[p, r] · w[r, :]` for `R` rows: `a` is `R × red`, `w` is `red × C_out`,
+/// `y` is `R × C_out`. Output channels go in register blocks of 16, then 8, then one by one.
 #[inline(always)]
-fn gemv(a: &[f32], w: &[f32], b: &[f32], y: &mut [f32]) {
-    let co = y.len();
-    y.copy_from_slice(b);
-    for (&ar, wr) in a.iter().zip(w.chunks_exact(co)) {
-        for (yo, &wo) in y.iter_mut().zip(wr) {
-            *yo += ar * wo;
-        }
+fn gemm_rows<M: Madd, const R: usize>(a: &[f32], red: usize, w: &[f32], b: &[f32], y: &mut [f32]) {
+    let co = b.len();
+    let mut ob = 0;
+    while ob + 16 <= co {
+        block::<M, R, 16>(a, red, w, b, co, ob, y);
+        ob += 16;
+    }
+    if ob + 8 <= co {
+        block::<M, R, 8>(a, red, w, b, co, ob, y);
+        ob += 8;
+    }
+    while ob < co {
+        block::<M, R, 1>(a, red, w, b, co, ob, y);
+        ob += 1;
     }
 }
 
-/// [`gemv`] for four input rows `a` (`4 × ci`) into four output rows `y` (`4 × co`).
+/// One `R × NB` register block of [`gemm_rows`], output channels `ob .. ob + NB`.
 #[inline(always)]
-fn gemv4(a: &[f32], w: &[f32], b: &[f32], ci: usize, co: usize, y: &mut [f32]) {
-    let (y0, rest) = y.split_at_mut(co);
-    let (y1, rest) = rest.split_at_mut(co);
-    let (y2, y3) = rest.split_at_mut(co);
-    y0.copy_from_slice(b);
-    y1.copy_from_slice(b);
-    y2.copy_from_slice(b);
-    y3.copy_from_slice(b);
-    for (r, wr) in w.chunks_exact(co).enumerate().take(ci) {
-        let (a0, a1, a2, a3) = (a[r], a[ci + r], a[2 * ci + r], a[3 * ci + r]);
-        for ((((o0, o1), o2), o3), &wo) in y0
-            .iter_mut()
-            .zip(y1.iter_mut())
-            .zip(y2.iter_mut())
-            .zip(y3.iter_mut())
-            .zip(wr)
-        {
-            *o0 += a0 * wo;
-            *o1 += a1 * wo;
-            *o2 += a2 * wo;
-            *o3 += a3 * wo;
+fn block<M: Madd, const R: usize, const NB: usize>(
+    a: &[f32],
+    red: usize,
+    w: &[f32],
+    b: &[f32],
+    co: usize,
+    ob: usize,
+    y: &mut [f32],
+) {
+    let mut acc = [[0.0f32; NB]; R];
+    let bias: &[f32; NB] = b[ob..ob + NB].try_into().unwrap_or(&[0.0; NB]);
+    for row in acc.iter_mut() {
+        *row = *bias;
+    }
+    for r in 0..red {
+        let wr: &[f32; NB] = w[r * co + ob..r * co + ob + NB]
+            .try_into()
+            .unwrap_or(&[0.0; NB]);
+        for (p, row) in acc.iter_mut().enumerate() {
+            let ap = a[p * red + r];
+            for j in 0..NB {
+                row[j] = M::madd(ap, wr[j], row[j]);
+            }
         }
+    }
+    for (p, row) in acc.iter().enumerate() {
+        y[p * co + ob..p * co + ob + NB].copy_from_slice(row);
     }
 }
 
@@ -191,6 +232,8 @@ mod tests {
             (7, 5, 3, 4, 3, 2, Padding::Same),
             (8, 8, 3, 5, 5, 2, Padding::Same),
             (9, 6, 5, 7, 1, 1, Padding::Same),
+            (5, 7, 9, 29, 1, 1, Padding::Same),
+            (4, 4, 6, 40, 3, 1, Padding::Same),
             (3, 3, 4, 6, 3, 3, Padding::Valid),
             (6, 6, 2, 3, 3, 1, Padding::Same),
         ] {
@@ -200,8 +243,13 @@ mod tests {
             let b = pseudo(co, 3);
             let wts = Conv2dWeights::from_ohwi(&ohwi, co, k, k, ci, b.clone());
             let mut y = vec![0.0; win.out_h * win.out_w * co];
-            let mut patch = vec![0.0; k * k * ci];
-            conv2d(&x, &win, &wts, &mut patch, &mut y);
+            let mut patch = vec![0.0; ROWS * k * k * ci];
+            conv2d::<crate::ops::Plain>(&x, &win, &wts, &mut patch, &mut y);
+            let mut y2 = vec![0.0; y.len()];
+            conv2d::<crate::ops::Fused>(&x, &win, &wts, &mut patch, &mut y2);
+            for (a, b) in y.iter().zip(&y2) {
+                assert!((a - b).abs() < 1e-5);
+            }
             let r = reference(&x, &win, &ohwi, &b, ci, co);
             for (a, b) in y.iter().zip(&r) {
                 assert!(

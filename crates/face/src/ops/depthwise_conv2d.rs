@@ -1,4 +1,4 @@
-use super::Window;
+use super::{Madd, Window};
 
 /// Depthwise 2-D convolution with depth multiplier 1, NHWC, as TFLite's `DEPTHWISE_CONV_2D`:
 /// `y[oy, ox, c] = b[c] + Σ w[ky, kx, c] · x[oy·s + ky − pad, ox·s + kx − pad, c]` (zero outside).
@@ -9,32 +9,112 @@ use super::Window;
 /// # Panics
 /// If a slice length does not match the window and channel count.
 #[track_caller]
-pub fn depthwise_conv2d(x: &[f32], win: &Window, c: usize, w: &[f32], b: &[f32], y: &mut [f32]) {
+#[inline(always)]
+pub fn depthwise_conv2d<M: Madd>(
+    x: &[f32],
+    win: &Window,
+    c: usize,
+    w: &[f32],
+    b: &[f32],
+    y: &mut [f32],
+) {
     assert_eq!(x.len(), win.in_h * win.in_w * c, "depthwise input size");
     assert_eq!(y.len(), win.out_h * win.out_w * c, "depthwise output size");
     assert_eq!(w.len(), win.k_h * win.k_w * c, "depthwise kernel size");
     assert_eq!(b.len(), c, "depthwise bias size");
     for oy in 0..win.out_h {
+        // Valid taps of this row: ky with 0 ≤ oy·s + ky − pad < in_h.
+        let (ky0, ky1) = valid_taps(oy, win.stride_h, win.pad_top, win.k_h, win.in_h);
         for ox in 0..win.out_w {
+            let (kx0, kx1) = valid_taps(ox, win.stride_w, win.pad_left, win.k_w, win.in_w);
             let out = &mut y[(oy * win.out_w + ox) * c..][..c];
-            out.copy_from_slice(b);
-            for ky in 0..win.k_h {
-                let Some(iy) = Window::tap(oy, win.stride_h, ky, win.pad_top, win.in_h) else {
-                    continue;
-                };
-                for kx in 0..win.k_w {
-                    let Some(ix) = Window::tap(ox, win.stride_w, kx, win.pad_left, win.in_w) else {
-                        continue;
-                    };
-                    let xr = &x[(iy * win.in_w + ix) * c..][..c];
-                    let wr = &w[(ky * win.k_w + kx) * c..][..c];
-                    for ((o, &xv), &wv) in out.iter_mut().zip(xr).zip(wr) {
-                        *o += xv * wv;
-                    }
-                }
+            let base_y = oy * win.stride_h + ky0 - win.pad_top;
+            let base_x = ox * win.stride_w + kx0 - win.pad_left;
+            let mut cb = 0;
+            while cb + 16 <= c {
+                tap_block::<M, 16>(
+                    x,
+                    w,
+                    b,
+                    win,
+                    c,
+                    cb,
+                    (ky0, ky1, kx0, kx1),
+                    (base_y, base_x),
+                    out,
+                );
+                cb += 16;
+            }
+            while cb + 4 <= c {
+                tap_block::<M, 4>(
+                    x,
+                    w,
+                    b,
+                    win,
+                    c,
+                    cb,
+                    (ky0, ky1, kx0, kx1),
+                    (base_y, base_x),
+                    out,
+                );
+                cb += 4;
+            }
+            while cb < c {
+                tap_block::<M, 1>(
+                    x,
+                    w,
+                    b,
+                    win,
+                    c,
+                    cb,
+                    (ky0, ky1, kx0, kx1),
+                    (base_y, base_x),
+                    out,
+                );
+                cb += 1;
             }
         }
     }
+}
+
+/// Taps `k0 .. k1` of a window at output index `o` that fall inside `0 .. len`.
+#[inline(always)]
+fn valid_taps(o: usize, stride: usize, pad: usize, k: usize, len: usize) -> (usize, usize) {
+    let start = o * stride;
+    let k0 = pad.saturating_sub(start).min(k);
+    let k1 = (len + pad).saturating_sub(start).min(k).max(k0);
+    (k0, k1)
+}
+
+/// Channels `cb .. cb + NB` of one output pixel, accumulated in registers.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn tap_block<M: Madd, const NB: usize>(
+    x: &[f32],
+    w: &[f32],
+    b: &[f32],
+    win: &Window,
+    c: usize,
+    cb: usize,
+    (ky0, ky1, kx0, kx1): (usize, usize, usize, usize),
+    (base_y, base_x): (usize, usize),
+    out: &mut [f32],
+) {
+    let mut acc: [f32; NB] = b[cb..cb + NB].try_into().unwrap_or([0.0; NB]);
+    for ky in ky0..ky1 {
+        let iy = base_y + ky - ky0;
+        for kx in kx0..kx1 {
+            let ix = base_x + kx - kx0;
+            let xi = (iy * win.in_w + ix) * c + cb;
+            let wi = (ky * win.k_w + kx) * c + cb;
+            let xr: &[f32; NB] = x[xi..xi + NB].try_into().unwrap_or(&[0.0; NB]);
+            let wr: &[f32; NB] = w[wi..wi + NB].try_into().unwrap_or(&[0.0; NB]);
+            for j in 0..NB {
+                acc[j] = M::madd(xr[j], wr[j], acc[j]);
+            }
+        }
+    }
+    out[cb..cb + NB].copy_from_slice(&acc);
 }
 
 #[cfg(test)]
@@ -50,14 +130,14 @@ mod tests {
         let w = vec![1.0; 9 * 2];
         let b = [0.5, -1.0];
         let mut y = vec![0.0; 4 * 5 * 2];
-        depthwise_conv2d(&x, &win, 2, &w, &b, &mut y);
+        depthwise_conv2d::<crate::ops::Plain>(&x, &win, 2, &w, &b, &mut y);
         assert_eq!(y[0], 4.5); // corner: 2×2 taps
         assert_eq!(y[1], 3.0);
         assert_eq!(y[(5 + 1) * 2], 9.5); // interior
         assert_eq!(y[(5 + 4) * 2], 6.5); // right edge, 3×2 taps
         let win2 = Window::new(4, 4, [3, 3], [2, 2], Padding::Same);
         let mut y2 = vec![0.0; 2 * 2];
-        depthwise_conv2d(&vec![1.0; 16], &win2, 1, &[1.0; 9], &[0.0], &mut y2);
+        depthwise_conv2d::<crate::ops::Fused>(&vec![1.0; 16], &win2, 1, &[1.0; 9], &[0.0], &mut y2);
         // TF SAME with stride 2 on 4: pad 0 before, 1 after.
         assert_eq!(y2, vec![9.0, 6.0, 6.0, 4.0]);
     }

@@ -1,4 +1,5 @@
 /// `y = max(x, 0)` (TFLite `RELU`).
+#[inline(always)]
 pub fn relu(x: &[f32], y: &mut [f32]) {
     for (o, &v) in y.iter_mut().zip(x) {
         *o = v.max(0.0);
@@ -11,6 +12,7 @@ pub fn relu(x: &[f32], y: &mut [f32]) {
 /// # Panics
 /// If `x.len()` is not a multiple of `alpha.len()` or `y` has another length.
 #[track_caller]
+#[inline(always)]
 pub fn prelu(x: &[f32], alpha: &[f32], y: &mut [f32]) {
     assert_eq!(x.len(), y.len(), "prelu sizes");
     assert_eq!(x.len() % alpha.len(), 0, "prelu channel count");
@@ -29,6 +31,7 @@ pub fn prelu(x: &[f32], alpha: &[f32], y: &mut [f32]) {
 /// # Panics
 /// If the lengths differ.
 #[track_caller]
+#[inline(always)]
 pub fn add(a: &[f32], b: &[f32], y: &mut [f32]) {
     assert!(a.len() == b.len() && a.len() == y.len(), "add sizes");
     for ((o, &u), &v) in y.iter_mut().zip(a).zip(b) {

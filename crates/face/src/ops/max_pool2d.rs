@@ -7,6 +7,7 @@ use super::Window;
 /// # Panics
 /// If a slice length does not match the window and channel count.
 #[track_caller]
+#[inline(always)]
 pub fn max_pool2d(x: &[f32], win: &Window, c: usize, y: &mut [f32]) {
     assert_eq!(x.len(), win.in_h * win.in_w * c, "max_pool input size");
     assert_eq!(y.len(), win.out_h * win.out_w * c, "max_pool output size");

@@ -7,13 +7,15 @@
 mod conv2d;
 mod depthwise_conv2d;
 mod elementwise;
+mod madd;
 mod max_pool2d;
 mod pad;
 mod window;
 
-pub use conv2d::{conv2d, Conv2dWeights};
+pub use conv2d::{conv2d, Conv2dWeights, ROWS as CONV_ROWS};
 pub use depthwise_conv2d::depthwise_conv2d;
 pub use elementwise::{add, prelu, relu};
+pub use madd::{Fused, Madd, Plain};
 pub use max_pool2d::max_pool2d;
 pub use pad::pad4;
 pub use window::Window;

@@ -4,6 +4,7 @@
 /// # Panics
 /// If `x` or `y` does not have the implied size.
 #[track_caller]
+#[inline(always)]
 pub fn pad4(x: &[f32], shape: [usize; 4], pads: [[usize; 2]; 4], y: &mut [f32]) {
     let out: [usize; 4] = std::array::from_fn(|d| shape[d] + pads[d][0] + pads[d][1]);
     assert_eq!(x.len(), shape.iter().product::<usize>(), "pad input size");
