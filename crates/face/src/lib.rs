@@ -25,3 +25,10 @@ pub use landmark_network::{CropLandmarks, LandmarkNetwork, LANDMARK_INPUT, NUM_L
 pub fn sigmoid(x: f32) -> f32 {
     1.0 / (1.0 + (-x.clamp(-100.0, 100.0)).exp())
 }
+mod detection;
+pub mod detector;
+pub mod letterbox;
+pub mod nms;
+
+pub use detection::Detection;
+pub use detector::{DetectorOptions, FaceDetector};

@@ -41,3 +41,43 @@ fn landmark_network_matches_tflite_on_every_case() {
     }
     println!("worst case: {worst:.2e} crop px");
 }
+
+#[test]
+fn detector_best_anchor_matches_tflite_on_every_case() {
+    let (Some(reference), Some(models)) = (common::reference_dir(), common::models_dir()) else {
+        return;
+    };
+    let mut det = visage_face::FaceDetector::load(&models).unwrap();
+    for case in common::cases(&reference) {
+        let input = common::read_rgb(reference.join(&case).join("det128.png"));
+        let all = det.run_rgb8(input.as_raw()).unwrap();
+        let (best, d) = all
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.score.total_cmp(&b.1.score))
+            .unwrap();
+        let e = common::read_json(reference.join(&case).join("detector_raw.json"));
+        assert_eq!(
+            best as u64,
+            e["anchor_index"].as_u64().unwrap(),
+            "{case}: best anchor"
+        );
+        let mut worst = (d.score as f64 - e["score"].as_f64().unwrap()).abs();
+        for k in 0..2 {
+            worst =
+                worst.max((d.center[k] as f64 - e["box_center_norm"][k].as_f64().unwrap()).abs());
+            worst = worst.max((d.size[k] as f64 - e["box_size_norm"][k].as_f64().unwrap()).abs());
+        }
+        for (p, q) in d
+            .keypoints
+            .iter()
+            .zip(e["keypoints_norm"].as_array().unwrap())
+        {
+            for k in 0..2 {
+                worst = worst.max((p[k] as f64 - q[k].as_f64().unwrap()).abs());
+            }
+        }
+        println!("{case}: anchor {best}, max |Δ| = {worst:.2e} (normalised)");
+        assert!(worst < 1e-3, "{case}: detector differs by {worst}");
+    }
+}
