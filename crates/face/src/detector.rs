@@ -7,7 +7,7 @@ use std::path::Path;
 use image::RgbImage;
 
 use crate::anchors::{blazeface_anchors, DETECTOR_INPUT, NUM_ANCHORS};
-use crate::letterbox::{letterbox_resize, Letterbox};
+use crate::letterbox::{letterbox_bilinear, letterbox_resize, Letterbox};
 use crate::nms::{weighted_nms, NMS_IOU_THRESHOLD};
 use crate::{sigmoid, Detection, FaceError, ModelFile, Network};
 
@@ -21,6 +21,18 @@ pub struct DetectorOptions {
     pub score_threshold: f32,
     /// IoU above which weighted NMS merges detections ([`NMS_IOU_THRESHOLD`]).
     pub iou_threshold: f32,
+    /// How the frame is resized into the 128×128 input.
+    pub resize: ResizeFilter,
+}
+
+/// Resampling of the letter-boxed frame into the detector input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ResizeFilter {
+    /// Area averaging (anti-aliased; how `shared/reference/facemesh/*/det128.png` was made).
+    Area,
+    /// Bilinear sampling without anti-aliasing (MediaPipe's CPU `ImageToTensorCalculator`).
+    #[default]
+    Bilinear,
 }
 
 impl Default for DetectorOptions {
@@ -28,6 +40,7 @@ impl Default for DetectorOptions {
         DetectorOptions {
             score_threshold: DETECTION_SCORE_THRESHOLD,
             iou_threshold: NMS_IOU_THRESHOLD,
+            resize: ResizeFilter::default(),
         }
     }
 }
@@ -123,7 +136,10 @@ impl FaceDetector {
             });
         }
         let mut rgb = std::mem::take(&mut self.input_rgb);
-        let lb: Letterbox = letterbox_resize(image, DETECTOR_INPUT, &mut rgb);
+        let lb: Letterbox = match self.options.resize {
+            ResizeFilter::Area => letterbox_resize(image, DETECTOR_INPUT, &mut rgb),
+            ResizeFilter::Bilinear => letterbox_bilinear(image, DETECTOR_INPUT, &mut rgb),
+        };
         let all = self.run_rgb8(&rgb);
         self.input_rgb = rgb;
         let candidates = all?

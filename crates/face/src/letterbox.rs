@@ -76,6 +76,44 @@ pub fn letterbox_resize(image: &RgbImage, size: usize, out: &mut Vec<u8>) -> Let
     lb
 }
 
+/// Letter-boxes `image` into a `size × size` RGB8 buffer by bilinear sampling, as MediaPipe's
+/// CPU `ImageToTensorCalculator` (OpenCV `warpAffine`, `INTER_LINEAR`, zero border): output
+/// pixel `(i, j)` samples the canvas at `(i·side/size, j·side/size)` (corner-aligned, as
+/// MediaPipe's perspective transform from the canvas corners).
+pub fn letterbox_bilinear(image: &RgbImage, size: usize, out: &mut Vec<u8>) -> Letterbox {
+    let (w, h) = (image.width() as i64, image.height() as i64);
+    let lb = Letterbox::for_frame(image.width(), image.height());
+    let scale = lb.side as f32 / size as f32;
+    let src = image.as_raw();
+    out.clear();
+    out.resize(size * size * 3, 0);
+    let px = |x: i64, y: i64, c: usize| -> f32 {
+        if x < 0 || y < 0 || x >= w || y >= h {
+            0.0
+        } else {
+            src[((y * w + x) * 3) as usize + c] as f32
+        }
+    };
+    for j in 0..size {
+        let fy = j as f32 * scale - lb.offset_y as f32;
+        let y0 = fy.floor();
+        let ay = fy - y0;
+        for i in 0..size {
+            let fx = i as f32 * scale - lb.offset_x as f32;
+            let x0 = fx.floor();
+            let ax = fx - x0;
+            let (x0, y0) = (x0 as i64, y0 as i64);
+            for c in 0..3 {
+                let top = px(x0, y0, c) * (1.0 - ax) + px(x0 + 1, y0, c) * ax;
+                let bottom = px(x0, y0 + 1, c) * (1.0 - ax) + px(x0 + 1, y0 + 1, c) * ax;
+                out[(j * size + i) * 3 + c] =
+                    (top * (1.0 - ay) + bottom * ay).round().clamp(0.0, 255.0) as u8;
+            }
+        }
+    }
+    lb
+}
+
 /// For each of `dst` output pixels along one axis of a canvas of `canvas` pixels, the frame
 /// pixels (`0..len`, placed at `offset`) it overlaps and their weights (overlap / output
 /// pixel extent; canvas pixels outside the frame are black and contribute nothing).

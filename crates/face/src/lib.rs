@@ -31,4 +31,16 @@ pub mod letterbox;
 pub mod nms;
 
 pub use detection::Detection;
-pub use detector::{DetectorOptions, FaceDetector};
+pub use detector::{DetectorOptions, FaceDetector, ResizeFilter};
+pub mod crop;
+mod face;
+pub mod face_mesh;
+pub mod landmarker;
+pub mod roi;
+pub mod tracker;
+
+pub use face::{points_bbox, Face};
+pub use face_mesh::FaceMesh;
+pub use landmarker::{FaceLandmarker, FrameLandmarks};
+pub use roi::Roi;
+pub use tracker::{FaceTracker, TrackStep};
