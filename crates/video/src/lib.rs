@@ -1,1 +1,20 @@
-//! Frame sources (in progress).
+//! Frame sources for visage: videos decoded by the FFmpeg command-line tools (`ffprobe` +
+//! `ffmpeg -f rawvideo -pix_fmt rgb24 -` through a pipe, one frame in memory at a time), folders
+//! of images and single images. All frames are RGB8 in display orientation.
+//!
+//! Why the command-line tools: no C libraries to build against (FFmpeg's libraries change their
+//! API across versions), and a crash in a decoder cannot take the process down. The cost is one
+//! copy per frame through the pipe. Needs the Debian package `ffmpeg` at run time.
+//!
+//! A truncated or corrupt video yields every decodable frame, then one
+//! [`VideoError::Broken`] naming the frame index where decoding stopped.
+
+mod error;
+pub mod ffmpeg;
+mod frame;
+mod source;
+
+pub use error::VideoError;
+pub use ffmpeg::{ffmpeg_available, probe, VideoInfo, VideoReader};
+pub use frame::Frame;
+pub use source::{is_image_path, read_image, FrameSource, IMAGE_EXTENSIONS};

@@ -1,0 +1,35 @@
+use std::path::PathBuf;
+
+/// Errors of the frame sources. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum VideoError {
+    /// A file or folder could not be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// An image file could not be decoded.
+    #[error("{}: cannot decode image: {reason}", path.display())]
+    Image { path: PathBuf, reason: String },
+    /// `ffmpeg`/`ffprobe` are not installed.
+    #[error("{}: decoding video needs the FFmpeg command-line tools ({tool} not found: {reason}); install them, e.g. `apt-get install ffmpeg`", path.display())]
+    ToolMissing {
+        path: PathBuf,
+        tool: &'static str,
+        reason: String,
+    },
+    /// `ffprobe` found no decodable video stream.
+    #[error("{}: not a readable video: {reason}", path.display())]
+    NotVideo { path: PathBuf, reason: String },
+    /// Decoding stopped before the end of the stream: frames before `frame` were delivered.
+    #[error("{}: video is truncated or corrupt; decoding broke at frame {frame}: {reason}", path.display())]
+    Broken {
+        path: PathBuf,
+        frame: usize,
+        reason: String,
+    },
+    /// A folder holds no image files.
+    #[error("{}: no images (.png, .jpg, .jpeg) in this folder", path.display())]
+    EmptyFolder { path: PathBuf },
+}
