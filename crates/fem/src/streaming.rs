@@ -46,6 +46,11 @@ impl StreamingSolver {
         &self.system
     }
 
+    /// The pre-factored system, mutably (the clip solver reuses its factorisations).
+    pub fn system_mut(&mut self) -> &mut FusionSystem {
+        &mut self.system
+    }
+
     /// Forgets the history: the next frame is solved without the temporal term (shot cut, lost
     /// track; ERRATA 18).
     pub fn reset(&mut self) {

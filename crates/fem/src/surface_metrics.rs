@@ -12,12 +12,13 @@
 //! Boundary vertices are excluded from both means: there the Laplacian measures the boundary's
 //! curvature, not the surface's.
 
+use visage_mesh::OneRing;
+
 /// Per-frame metric evaluation on a mesh of fixed connectivity; buffers are allocated once.
 #[derive(Clone, Debug)]
 pub struct SurfaceMetrics {
     triangles: Vec<[u32; 3]>,
-    ring_start: Vec<usize>,
-    ring: Vec<u32>,
+    ring: OneRing,
     interior: Vec<bool>,
     laplace: Vec<[f64; 3]>,
     area: Vec<f64>,
@@ -50,29 +51,12 @@ impl SurfaceMetrics {
     /// Prepares the evaluation for `vertex_count` vertices, `triangles` and the boundary flags
     /// (#V; `true` = on the boundary).
     pub fn new(vertex_count: usize, triangles: &[[u32; 3]], boundary: &[bool]) -> Self {
-        let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); vertex_count];
-        for t in triangles {
-            for a in 0..3 {
-                for b in 0..3 {
-                    if a != b && !neighbours[t[a] as usize].contains(&t[b]) {
-                        neighbours[t[a] as usize].push(t[b]);
-                    }
-                }
-            }
-        }
-        let mut ring_start = Vec::with_capacity(vertex_count + 1);
-        let mut ring = Vec::new();
-        ring_start.push(0);
-        for list in &neighbours {
-            ring.extend_from_slice(list);
-            ring_start.push(ring.len());
-        }
+        let ring = OneRing::new(vertex_count, triangles);
         let interior = (0..vertex_count)
-            .map(|i| !boundary.get(i).copied().unwrap_or(false) && !neighbours[i].is_empty())
+            .map(|i| !boundary.get(i).copied().unwrap_or(false) && !ring.of(i).is_empty())
             .collect();
         SurfaceMetrics {
             triangles: triangles.to_vec(),
-            ring_start,
             ring,
             interior,
             laplace: vec![[0.0; 3]; vertex_count],
@@ -128,7 +112,7 @@ impl SurfaceMetrics {
             }
             h_sum += norm(self.laplace[i]) / (2.0 * self.area[i]);
             let mut mean = [0.0; 3];
-            for &j in &self.ring[self.ring_start[i]..self.ring_start[i + 1]] {
+            for &j in self.ring.of(i) {
                 let nj = self.normals[j as usize];
                 mean = [mean[0] + nj[0], mean[1] + nj[1], mean[2] + nj[2]];
             }

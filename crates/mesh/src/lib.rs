@@ -14,6 +14,7 @@ mod edge_map;
 mod error;
 pub mod io;
 mod mask;
+mod one_ring;
 mod planar_mesh;
 mod sampling;
 mod trimesh;
@@ -22,6 +23,7 @@ pub use depth_aware::{flip_depth_aware, TriangulationKind, AUTO_FLATNESS_THRESHO
 pub use edge_map::{edge_key, edge_triangles};
 pub use error::MeshError;
 pub use mask::Mask;
+pub use one_ring::OneRing;
 pub use planar_mesh::{orient2d, PlanarMesh};
 pub use sampling::{sample_domain, CellGrid, Samples, SamplingOptions, DEFAULT_REFINE_TOLERANCE_M, MIN_CELL_COVERAGE};
 pub use trimesh::TriMesh;

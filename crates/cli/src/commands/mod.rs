@@ -1,0 +1,5 @@
+//! One module per subcommand.
+
+pub mod bench_solver;
+pub mod fuse;
+pub mod render;

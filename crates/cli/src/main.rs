@@ -1,0 +1,43 @@
+//! `visage`: temporally stable metric 3-D face meshes from video, on a CPU.
+//!
+//! A thin binary over the library crates: each subcommand lives in `commands/<name>.rs`, parses
+//! its raw flags into a validated configuration and calls the libraries.
+//!
+//! Exit codes: 0 success; 1 an internal error (a bug); 2 bad input or an unusable environment
+//! (missing or malformed files, invalid parameters, unwritable output), with a message that
+//! names the file and the problem. Usage errors from the argument parser also exit with 2.
+
+mod commands;
+mod exit;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Temporally stable, metric 3-D face meshes from RGB video, in real time on a CPU.
+#[derive(Parser)]
+#[command(name = "visage", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Reconstruct a mesh sequence from a folder of 16-bit PNG depth maps (paper §2, §4).
+    Fuse(commands::fuse::FuseArgs),
+    /// Time the factor-once solver at several mesh sizes and print JSON.
+    BenchSolver(commands::bench_solver::BenchSolverArgs),
+    /// Render a mesh to a colour PNG and/or a 16-bit depth PNG (paper §6).
+    Render(commands::render::RenderArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Fuse(args) => commands::fuse::run(args),
+        Command::BenchSolver(args) => commands::bench_solver::run(args),
+        Command::Render(args) => commands::render::run(args),
+    };
+    exit::report(result)
+}

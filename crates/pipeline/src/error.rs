@@ -1,0 +1,42 @@
+use std::path::PathBuf;
+
+use visage_camera::CameraError;
+use visage_fem::FemError;
+use visage_mesh::io::MeshIoError;
+use visage_mesh::MeshError;
+
+/// Errors of the sequence pipeline. Each names the file or parameter at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum PipelineError {
+    #[error(transparent)]
+    Camera(#[from] CameraError),
+    #[error("meshing: {0}")]
+    Mesh(#[from] MeshError),
+    #[error("solver: {0}")]
+    Fem(#[from] FemError),
+    #[error(transparent)]
+    MeshIo(#[from] MeshIoError),
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: no PNG depth frames found", dir.display())]
+    NoFrames { dir: PathBuf },
+    #[error("{}: frame is {width}×{height} but the first frame is {expected_width}×{expected_height}", path.display())]
+    FrameSize {
+        path: PathBuf,
+        width: u32,
+        height: u32,
+        expected_width: u32,
+        expected_height: u32,
+    },
+    #[error("{}: no frame has any valid depth", dir.display())]
+    NoValidDepth { dir: PathBuf },
+    #[error("invalid option {name} = {value}: {reason}")]
+    InvalidOption {
+        name: &'static str,
+        value: String,
+        reason: &'static str,
+    },
+}

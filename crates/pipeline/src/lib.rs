@@ -1,0 +1,17 @@
+//! Sequence-level orchestration of visage: depth sequences in, fused mesh sequences and
+//! metrics out. The stages live in the library crates (`visage-camera`, `visage-mesh`,
+//! `visage-fem`); this crate fixes the per-sequence set-up and drives the per-frame loop.
+
+mod atomic_write;
+mod depth_sequence;
+mod error;
+mod fuse;
+mod fusion_setup;
+mod report;
+
+pub use atomic_write::write_atomically;
+pub use depth_sequence::{DepthSequence, SequenceSurvey, DOMAIN_MAJORITY};
+pub use error::PipelineError;
+pub use fuse::{fuse_sequence, to_positions, FrameResult, FuseOptions, Fuser, Mode, DEFAULT_MAX_DEPTH_M};
+pub use fusion_setup::{FusionSetup, MeshingOptions};
+pub use report::{FrameMetrics, FrameStatus, FuseReport, FuseSummary, MeshSummary, SolverSummary};
