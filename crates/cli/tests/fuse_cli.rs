@@ -15,9 +15,10 @@ fn camera() -> Intrinsics {
     Intrinsics::new(W, H, 100.0, 100.0, 47.5, 35.5).unwrap()
 }
 
-/// Noise-free surface: z as a function of normalised image coordinates and the frame.
-fn surface(xn: f64, yn: f64, frame: usize) -> f64 {
-    0.6 + 0.05 * (2.5 * xn).cos() * (2.0 * yn).cos() + 0.004 * frame as f64 * xn
+/// Noise-free surface: z as a function of normalised image coordinates (a still scene; the
+/// frame index is kept so that moving scenes can be added).
+fn surface(xn: f64, yn: f64, _frame: usize) -> f64 {
+    0.6 + 0.05 * (2.5 * xn).cos() * (2.0 * yn).cos()
 }
 
 /// Writes `frames` depth PNGs: the surface plus 4 mm Gaussian-ish noise and a moving hole.
@@ -156,6 +157,9 @@ fn bad_input_is_reported_with_the_file_and_exit_code_2() {
     let mut args = base(&depth, &cam);
     args.extend(["--lambda".into(), "-1".into()]);
     assert_bad_input(&run(args), "lambda");
+    let mut args = base(&depth, &cam);
+    args.extend(["--mu=nan".into()]);
+    assert_bad_input(&run(args), "mu");
     // A frame of another size, and an 8-bit frame: named, and nothing written.
     let mixed = tmp.path().join("mixed");
     write_sequence(&mixed, 2, None);

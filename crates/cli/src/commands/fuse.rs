@@ -58,10 +58,10 @@ pub struct FuseArgs {
     #[arg(long, default_value_t = DEFAULT_MAX_DEPTH_M)]
     max_depth: f64,
     /// Smoothness weight λ (reference pixels⁴; see ARCHITECTURE.md).
-    #[arg(long, default_value_t = Weights::default().lambda)]
+    #[arg(long, default_value_t = Weights::default().lambda, allow_hyphen_values = true)]
     lambda: f64,
     /// Temporal weight μ (dimensionless).
-    #[arg(long, default_value_t = Weights::default().mu)]
+    #[arg(long, default_value_t = Weights::default().mu, allow_hyphen_values = true)]
     mu: f64,
     /// Temporal model.
     #[arg(long, value_enum, default_value = "streaming")]
