@@ -1,6 +1,7 @@
 //! Small sparse-matrix helpers over faer's compressed-column storage.
 
 use faer::sparse::{SparseColMat, Triplet};
+use faer::reborrow::ReborrowMut;
 use faer::{MatMut, MatRef};
 
 use crate::FemError;
@@ -40,7 +41,7 @@ pub fn for_each_entry(a: &SparseMatrix, mut f: impl FnMut(usize, usize, f64)) {
 /// `y ← α·A·x + β·y` for a symmetric `A` (so column access gives rows), `x, y` of shape n × c.
 ///
 /// # Panics
-/// If the shapes disagree.
+/// If the shapes disagree or `x`, `y` are not column-major.
 #[track_caller]
 pub fn sym_matmul(a: &SparseMatrix, x: MatRef<'_, f64>, alpha: f64, beta: f64, mut y: MatMut<'_, f64>) {
     assert!(x.nrows() == a.ncols() && y.nrows() == a.nrows() && x.ncols() == y.ncols());
@@ -48,14 +49,17 @@ pub fn sym_matmul(a: &SparseMatrix, x: MatRef<'_, f64>, alpha: f64, beta: f64, m
     let row_idx = a.symbolic().row_idx();
     let val = a.val();
     for c in 0..x.ncols() {
-        for i in 0..a.nrows() {
+        let xc = x.col(c).try_as_col_major().expect("column-major x").as_slice();
+        let yc = y.rb_mut().col_mut(c).try_as_col_major_mut().expect("column-major y").as_slice_mut();
+        for (i, yi) in yc.iter_mut().enumerate() {
             // A symmetric: row i of A = column i.
-            let mut acc = 0.0;
-            for p in col_ptr[i]..col_ptr[i + 1] {
-                acc += val[p] * x[(row_idx[p], c)];
-            }
-            let prev = if beta == 0.0 { 0.0 } else { beta * y[(i, c)] };
-            y[(i, c)] = alpha * acc + prev;
+            let range = col_ptr[i]..col_ptr[i + 1];
+            let acc: f64 = row_idx[range.clone()]
+                .iter()
+                .zip(&val[range])
+                .map(|(&r, &v)| v * xc[r])
+                .sum();
+            *yi = if beta == 0.0 { alpha * acc } else { alpha * acc + beta * *yi };
         }
     }
 }

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Sets up visage on a fresh Debian machine and runs the main job on a sample.
+#
+#   scripts/setup.sh          install system packages, build (release), fetch the pinned
+#                             MediaPipe models from npm, run the sample job into out/sample/
+#   scripts/setup.sh --ci     packages and models only (what the test suite needs)
+#
+# Needs: a Rust toolchain (cargo), Node.js/npm (for `npm pack`), apt-get as root (or the
+# packages below already installed).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+mode=full
+[ "${1:-}" = "--ci" ] && mode=ci
+
+# System packages: FFmpeg's command-line tools decode video (crates/video).
+need=()
+command -v ffmpeg >/dev/null 2>&1 || need+=(ffmpeg)
+command -v npm >/dev/null 2>&1 || need+=(npm)
+if [ ${#need[@]} -gt 0 ]; then
+  if [ "$(id -u)" = 0 ]; then
+    echo "setup: installing ${need[*]} (apt)"
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${need[@]}" >/dev/null
+  else
+    echo "setup: please install: ${need[*]} (e.g. sudo apt-get install ${need[*]})" >&2
+    exit 1
+  fi
+fi
+
+if [ "$mode" = ci ]; then
+  cargo build -q -p visage-cli
+  bin=target/debug/visage
+else
+  cargo build --release -p visage-cli
+  bin=target/release/visage
+fi
+
+# Model files: npm package @mediapipe/face_mesh, pinned and sha256-checked, into models/.
+"$bin" models fetch
+
+[ "$mode" = ci ] && exit 0
+
+# The main job on a sample.
+"$bin" sample --out out/sample
