@@ -44,3 +44,14 @@ pub use face_mesh::FaceMesh;
 pub use landmarker::{FaceLandmarker, FrameLandmarks};
 pub use roi::Roi;
 pub use tracker::{FaceTracker, TrackStep};
+pub mod canonical_mesh;
+pub mod face_geometry;
+
+pub use canonical_mesh::CanonicalMesh;
+pub use face_geometry::{fit_face_geometry, FaceGeometry, FacePose};
+pub mod face_depth;
+
+pub use face_depth::{face_trimesh, render_faces_depth};
+pub mod kdtree;
+
+pub use kdtree::KdTree;

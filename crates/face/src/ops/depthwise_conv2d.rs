@@ -137,7 +137,7 @@ mod tests {
         assert_eq!(y[(5 + 4) * 2], 6.5); // right edge, 3×2 taps
         let win2 = Window::new(4, 4, [3, 3], [2, 2], Padding::Same);
         let mut y2 = vec![0.0; 2 * 2];
-        depthwise_conv2d::<crate::ops::Fused>(&vec![1.0; 16], &win2, 1, &[1.0; 9], &[0.0], &mut y2);
+        depthwise_conv2d::<crate::ops::Fused>(&[1.0; 16], &win2, 1, &[1.0; 9], &[0.0], &mut y2);
         // TF SAME with stride 2 on 4: pad 0 before, 1 after.
         assert_eq!(y2, vec![9.0, 6.0, 6.0, 4.0]);
     }
