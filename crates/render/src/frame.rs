@@ -8,7 +8,7 @@ use crate::camera::Camera;
 use crate::mat4::{Mat3, Mat4};
 use crate::normals::{normal_matrix, transform_normal, vertex_normals};
 use crate::rasterize::{CullMode, Rasterizer, NO_TRIANGLE};
-use crate::shading::{blinn_phong, Light, Material};
+use crate::shading::{BlinnPhong, Light, Material};
 use crate::texture::{Texture, Wrap};
 use crate::RenderError;
 
@@ -58,6 +58,9 @@ impl Default for Scene<'_> {
 }
 
 /// The buffers of one rendered frame, all `width × height`, row-major (`[v · width + u]`).
+///
+/// `triangle_id` and `barycentrics` may be left empty (see [`Frame::color_and_depth`]): the
+/// renderer then skips them, which saves memory traffic when only images are wanted.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// Image width, pixels.
@@ -68,9 +71,10 @@ pub struct Frame {
     pub color: Vec<[f32; 3]>,
     /// Metric depth of the kind chosen at construction, `0` = background.
     pub depth: DepthMap,
-    /// Visible mesh triangle, [`NO_TRIANGLE`] for background.
+    /// Visible mesh triangle, [`NO_TRIANGLE`] for background (empty: not produced).
     pub triangle_id: Vec<u32>,
-    /// Perspective-correct barycentrics in the visible triangle, zero for background.
+    /// Perspective-correct barycentrics in the visible triangle, zero for background (empty: not
+    /// produced).
     pub barycentrics: Vec<[f32; 3]>,
 }
 
@@ -85,6 +89,15 @@ impl Frame {
             depth: DepthMap::empty(width, height, kind),
             triangle_id: vec![NO_TRIANGLE; n],
             barycentrics: vec![[0.0; 3]; n],
+        }
+    }
+
+    /// Colour and depth buffers only (`triangle_id` and `barycentrics` empty).
+    pub fn color_and_depth(width: u32, height: u32, kind: DepthKind) -> Frame {
+        Frame {
+            triangle_id: Vec::new(),
+            barycentrics: Vec::new(),
+            ..Frame::new(width, height, kind)
         }
     }
 }
@@ -127,17 +140,17 @@ impl Renderer {
         frame: &mut Frame,
     ) -> Result<(), RenderError> {
         crate::validate::check_mesh(mesh)?;
-        scene.material.validate()?;
-        scene.light.validate()?;
+        let shader = BlinnPhong::new(scene.material, scene.light)?;
         let k = camera.intrinsics;
+        let n_pixels = k.width as usize * k.height as usize;
         if frame.width != k.width
             || frame.height != k.height
             || frame.depth.width != k.width
             || frame.depth.height != k.height
-            || frame.color.len() != k.width as usize * k.height as usize
+            || frame.color.len() != n_pixels
             || frame.depth.data.len() != frame.color.len()
-            || frame.triangle_id.len() != frame.color.len()
-            || frame.barycentrics.len() != frame.color.len()
+            || (!frame.triangle_id.is_empty() && frame.triangle_id.len() != n_pixels)
+            || (!frame.barycentrics.is_empty() && frame.barycentrics.len() != n_pixels)
         {
             return Err(RenderError::BufferSize {
                 buffer: "frame",
@@ -194,34 +207,50 @@ impl Renderer {
         let positions = raster.camera_positions();
         let kind = frame.depth.kind;
         let w = k.width as usize;
+        // Rows of the optional buffers, or empty rows when a buffer is not wanted.
+        let tri_rows: Vec<&mut [u32]> = if frame.triangle_id.is_empty() {
+            (0..k.height).map(|_| &mut [][..]).collect()
+        } else {
+            frame.triangle_id.chunks_mut(w).collect()
+        };
+        let bary_rows: Vec<&mut [[f32; 3]]> = if frame.barycentrics.is_empty() {
+            (0..k.height).map(|_| &mut [][..]).collect()
+        } else {
+            frame.barycentrics.chunks_mut(w).collect()
+        };
         frame
             .color
             .par_chunks_mut(w)
             .zip(frame.depth.data.par_chunks_mut(w))
-            .zip(frame.triangle_id.par_chunks_mut(w))
-            .zip(frame.barycentrics.par_chunks_mut(w))
+            .zip(tri_rows)
+            .zip(bary_rows)
             .enumerate()
             .for_each(|(y, (((c_row, d_row), t_row), b_row))| {
+                let setups = raster.visibility_row(y);
                 for x in 0..w {
-                    let Some(f) = raster.fragment(x as u32, y as u32) else {
+                    let Some(f) = raster.fragment_in_row(setups, x, y) else {
                         c_row[x] = scene.background;
                         d_row[x] = 0.0;
-                        t_row[x] = NO_TRIANGLE;
-                        b_row[x] = [0.0; 3];
+                        if let Some(t) = t_row.get_mut(x) {
+                            *t = NO_TRIANGLE;
+                        }
+                        if let Some(b) = b_row.get_mut(x) {
+                            *b = [0.0; 3];
+                        }
                         continue;
                     };
                     // Indices were validated before rasterisation.
                     let t = mesh.triangles[f.triangle as usize].map(|i| i as usize);
                     let b = f.bary;
-                    let lerp3 = |a: [f64; 3], bb: [f64; 3], c: [f64; 3]| -> [f64; 3] {
-                        std::array::from_fn(|j| b[0] * a[j] + b[1] * bb[j] + b[2] * c[j])
-                    };
-                    let p = lerp3(positions[t[0]], positions[t[1]], positions[t[2]]);
+                    let (p0, p1, p2) = (positions[t[0]], positions[t[1]], positions[t[2]]);
+                    let p: [f64; 3] =
+                        std::array::from_fn(|j| b[0] * p0[j] + b[1] * p1[j] + b[2] * p2[j]);
                     let p_len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+                    let inv = -1.0 / p_len;
                     let view = [
-                        (-p[0] / p_len) as f32,
-                        (-p[1] / p_len) as f32,
-                        (-p[2] / p_len) as f32,
+                        (p[0] * inv) as f32,
+                        (p[1] * inv) as f32,
+                        (p[2] * inv) as f32,
                     ];
                     let (n0, n1, n2) = (normals[t[0]], normals[t[1]], normals[t[2]]);
                     let (b0, b1, b2) = (b[0] as f32, b[1] as f32, b[2] as f32);
@@ -229,7 +258,8 @@ impl Renderer {
                         std::array::from_fn(|j| b0 * n0[j] + b1 * n1[j] + b2 * n2[j]);
                     let n_len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
                     if n_len > 0.0 {
-                        n = n.map(|v| v / n_len);
+                        let inv = 1.0 / n_len;
+                        n = n.map(|v| v * inv);
                     }
                     if scene.two_sided && n[0] * view[0] + n[1] * view[1] + n[2] * view[2] < 0.0 {
                         n = n.map(|v| -v);
@@ -251,14 +281,18 @@ impl Renderer {
                         }
                         Albedo::Constant(c) => c,
                     };
-                    c_row[x] = blinn_phong(&scene.material, &scene.light, n, view, albedo);
+                    c_row[x] = shader.shade(n, view, albedo);
                     let value = match kind {
                         DepthKind::Z => f.z,
                         DepthKind::Ray => f.z * p_len / p[2],
                     };
                     d_row[x] = value as f32;
-                    t_row[x] = f.triangle;
-                    b_row[x] = [b0, b1, b2];
+                    if let Some(t) = t_row.get_mut(x) {
+                        *t = f.triangle;
+                    }
+                    if let Some(bb) = b_row.get_mut(x) {
+                        *bb = [b0, b1, b2];
+                    }
                 }
             });
         Ok(())

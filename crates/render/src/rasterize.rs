@@ -25,8 +25,12 @@ use crate::RenderError;
 /// Image rows per tile: the unit of parallel work and of z-buffer ownership.
 pub const TILE_ROWS: usize = 16;
 
-/// Triangles per parallel set-up task.
+/// Triangles per parallel set-up task (at least; grows for huge meshes so that the chunk count
+/// fits the 16-bit half of a set-up id).
 const SETUP_CHUNK: usize = 2048;
+
+/// Set-up ids are `chunk << 16 | index in chunk`; a chunk holds at most 3 set-ups per triangle.
+const MAX_CHUNK_TRIANGLES: usize = 0xffff / 3;
 
 /// Index stored in the visibility buffer for background pixels.
 pub const NO_TRIANGLE: u32 = u32::MAX;
@@ -54,8 +58,9 @@ pub struct ScreenTriangle {
     edges: [Edge; 3],
     /// `1/w = 1/z_camera` at the corners.
     inv_w: [f64; 3],
-    /// Barycentric coordinates of the corners in the original mesh triangle.
-    bary: [[f64; 3]; 3],
+    /// Barycentric coordinates of the corners in the original mesh triangle (`f32`: they only
+    /// weight attributes; depth comes from `inv_w` in `f64`).
+    bary: [[f32; 3]; 3],
     /// Inclusive pixel bounding box, already clamped to the image.
     x0: i32,
     x1: i32,
@@ -91,7 +96,6 @@ pub struct Rasterizer {
     camera_positions: Vec<[f64; 3]>,
     clip: Vec<[f64; 4]>,
     setup_chunks: Vec<Vec<ScreenTriangle>>,
-    setups: Vec<ScreenTriangle>,
     bins: Vec<Vec<u32>>,
     depth: Vec<f32>,
     index: Vec<u32>,
@@ -163,32 +167,39 @@ impl Rasterizer {
             });
 
         // Triangle set-up, in parallel over chunks; chunk order keeps triangle order.
-        let n_chunks = triangles.len().div_ceil(SETUP_CHUNK);
+        let chunk_len = SETUP_CHUNK.max(triangles.len().div_ceil(0xffff));
+        if chunk_len > MAX_CHUNK_TRIANGLES {
+            return Err(RenderError::Parameter {
+                field: "triangle count",
+                value: triangles.len() as f64,
+                reason: "more triangles than the rasteriser can index (about 1.4 billion)",
+            });
+        }
+        let n_chunks = triangles.len().div_ceil(chunk_len);
         self.setup_chunks.resize_with(n_chunks, Vec::new);
         let clip = &self.clip;
         triangles
-            .par_chunks(SETUP_CHUNK)
+            .par_chunks(chunk_len)
             .zip(self.setup_chunks.par_iter_mut())
             .enumerate()
             .for_each(|(c, (chunk, out))| {
                 out.clear();
                 for (i, t) in chunk.iter().enumerate() {
-                    let id = (c * SETUP_CHUNK + i) as u32;
+                    let id = (c * chunk_len + i) as u32;
                     setup_triangle(clip, *t, id, width, height, cull, out);
                 }
             });
-        self.setups.clear();
-        for chunk in &self.setup_chunks {
-            self.setups.extend_from_slice(chunk);
-        }
 
         // Binning into row tiles.
         let n_tiles = (height as usize).div_ceil(TILE_ROWS);
         self.bins.resize_with(n_tiles, Vec::new);
         self.bins.iter_mut().for_each(Vec::clear);
-        for (s, st) in self.setups.iter().enumerate() {
-            for tile in st.y0 as usize / TILE_ROWS..=st.y1 as usize / TILE_ROWS {
-                self.bins[tile].push(s as u32);
+        for (c, chunk) in self.setup_chunks.iter().enumerate() {
+            for (i, st) in chunk.iter().enumerate() {
+                let id = (c << 16 | i) as u32;
+                for tile in st.y0 as usize / TILE_ROWS..=st.y1 as usize / TILE_ROWS {
+                    self.bins[tile].push(id);
+                }
             }
         }
 
@@ -197,7 +208,7 @@ impl Rasterizer {
         self.depth.resize(n_pixels, f32::INFINITY);
         self.index.resize(n_pixels, NO_TRIANGLE);
         let tile_len = TILE_ROWS * width as usize;
-        let (setups, bins) = (&self.setups, &self.bins);
+        let (chunks, bins) = (&self.setup_chunks, &self.bins);
         self.depth
             .par_chunks_mut(tile_len)
             .zip(self.index.par_chunks_mut(tile_len))
@@ -208,7 +219,7 @@ impl Rasterizer {
                 let row0 = (tile * TILE_ROWS) as i32;
                 let row1 = row0 + (depth.len() / width as usize) as i32 - 1;
                 for &s in &bins[tile] {
-                    let st = &setups[s as usize];
+                    let st = &chunks[(s >> 16) as usize][(s & 0xffff) as usize];
                     scan(st, row0.max(st.y0), row1.min(st.y1), |x, y, z| {
                         let p = (y - row0) as usize * width as usize + x as usize;
                         if z < depth[p] {
@@ -229,13 +240,40 @@ impl Rasterizer {
         let s = *self
             .index
             .get(y as usize * self.width as usize + x as usize)?;
-        let st = self.setups.get(s as usize)?;
-        Some(st.fragment(x as f64, y as f64))
+        Some(self.setup(s)?.fragment(x as f64, y as f64))
+    }
+
+    /// The set-up with id `s` (`chunk << 16 | index`).
+    #[inline(always)]
+    fn setup(&self, s: u32) -> Option<&ScreenTriangle> {
+        self.setup_chunks
+            .get((s >> 16) as usize)?
+            .get((s & 0xffff) as usize)
+    }
+
+    /// Row `y` of the visibility buffer (set-up indices, [`NO_TRIANGLE`] for background).
+    ///
+    /// # Panics
+    /// If `y` is not a row of the last frame.
+    #[inline]
+    pub(crate) fn visibility_row(&self, y: usize) -> &[u32] {
+        let w = self.width as usize;
+        &self.index[y * w..(y + 1) * w]
+    }
+
+    /// The fragment at column `x` of row `y`, whose visibility row is `row`.
+    #[inline(always)]
+    pub(crate) fn fragment_in_row(&self, row: &[u32], x: usize, y: usize) -> Option<Fragment> {
+        let s = *row.get(x)?;
+        if s == NO_TRIANGLE {
+            return None;
+        }
+        Some(self.setup(s)?.fragment(x as f64, y as f64))
     }
 
     /// The set-ups of the last frame, in triangle order (for coverage tests and custom passes).
-    pub fn screen_triangles(&self) -> &[ScreenTriangle] {
-        &self.setups
+    pub fn screen_triangles(&self) -> impl Iterator<Item = &ScreenTriangle> {
+        self.setup_chunks.iter().flatten()
     }
 }
 
@@ -252,18 +290,21 @@ impl ScreenTriangle {
     }
 
     /// Perspective-correct reconstruction at pixel centre `(x, y)` (assumed covered).
+    #[inline(always)]
     fn fragment(&self, x: f64, y: f64) -> Fragment {
         let e: [f64; 3] = std::array::from_fn(|i| self.edges[i].eval(self.edges[i].row(y), x));
+        // λ_i = e_i / Σe; 1/z = Σ λ_i / w_i; perspective-correct weights (λ_i / w_i) · z.
         let sum = e[0] + e[1] + e[2];
-        let q: [f64; 3] = std::array::from_fn(|i| e[i] / sum * self.inv_w[i]);
-        let s = q[0] + q[1] + q[2];
-        let w: [f64; 3] = std::array::from_fn(|i| q[i] / s);
+        let q: [f64; 3] = std::array::from_fn(|i| e[i] * self.inv_w[i]);
+        let inv_s = 1.0 / (q[0] + q[1] + q[2]);
+        let w: [f64; 3] = std::array::from_fn(|i| q[i] * inv_s);
+        let b = &self.bary;
         let bary = std::array::from_fn(|j| {
-            w[0] * self.bary[0][j] + w[1] * self.bary[1][j] + w[2] * self.bary[2][j]
+            w[0] * b[0][j] as f64 + w[1] * b[1][j] as f64 + w[2] * b[2][j] as f64
         });
         Fragment {
             triangle: self.triangle,
-            z: 1.0 / s,
+            z: sum * inv_s,
             bary,
             front_facing: self.front_facing,
         }
@@ -331,7 +372,7 @@ fn setup_triangle(
         let (p1, p2) = (to_screen(&vs[i]), to_screen(&vs[i + 1]));
         let mut p = [first.0, p1.0, p2.0];
         let mut inv_w = [first.1, p1.1, p2.1];
-        let mut bary = [vs[0].bary, vs[i].bary, vs[i + 1].bary];
+        let mut bary = [vs[0].bary, vs[i].bary, vs[i + 1].bary].map(|b| b.map(|x| x as f32));
         let area = signed_area2(&p);
         if !(area.is_finite() && area != 0.0) {
             continue;

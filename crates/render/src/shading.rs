@@ -173,6 +173,62 @@ pub fn blinn_phong(
     })
 }
 
+/// Largest radiance dropped by [`BlinnPhong`]'s specular cut-off (linear units; an 8-bit sRGB step
+/// near black is 3·10⁻⁴).
+pub const SPECULAR_CUTOFF: f32 = 1e-5;
+
+/// [`blinn_phong`] prepared for one frame: identical except that the specular lobe is skipped
+/// where `k_s (ν·h)^α < SPECULAR_CUTOFF`, which saves the `powf` on most pixels.
+#[derive(Clone, Copy, Debug)]
+pub struct BlinnPhong {
+    material: Material,
+    light: Light,
+    /// `ν·h` below which the lobe is negligible.
+    cos_cutoff: f32,
+}
+
+impl BlinnPhong {
+    /// Validates `material` and `light` and precomputes the cut-off.
+    pub fn new(material: Material, light: Light) -> Result<BlinnPhong, RenderError> {
+        material.validate()?;
+        light.validate()?;
+        let cos_cutoff = if material.ks > 0.0 {
+            (SPECULAR_CUTOFF / material.ks).powf(1.0 / material.shininess)
+        } else {
+            f32::INFINITY
+        };
+        Ok(BlinnPhong {
+            material,
+            light,
+            cos_cutoff,
+        })
+    }
+
+    /// Radiance of Eq. (6.4) (see [`blinn_phong`] for the conventions).
+    #[inline(always)]
+    pub fn shade(&self, normal: [f32; 3], view: [f32; 3], albedo: [f32; 3]) -> [f32; 3] {
+        let (m, light) = (&self.material, &self.light);
+        let l = light.direction;
+        let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let n_dot_l = dot(normal, l).max(0.0);
+        let mut spec = 0.0;
+        if n_dot_l > 0.0 {
+            let h = [l[0] + view[0], l[1] + view[1], l[2] + view[2]];
+            let h_len = dot(h, h).sqrt();
+            if h_len > 0.0 {
+                let n_dot_h = (dot(normal, h) / h_len).clamp(0.0, 1.0);
+                if n_dot_h >= self.cos_cutoff {
+                    spec = m.ks * n_dot_h.powf(m.shininess);
+                }
+            }
+        }
+        std::array::from_fn(|c| {
+            (m.ka * light.ambient[c] + m.kd * n_dot_l * light.diffuse[c]) * albedo[c]
+                + spec * light.specular[c]
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -208,7 +264,15 @@ mod tests {
             light.diffuse = std::array::from_fn(|_| rng.random_range(0.0..=1.0));
             light.specular = std::array::from_fn(|_| rng.random_range(0.0..=1.0));
             let albedo = std::array::from_fn(|_| rng.random_range(0.0..=1.0));
-            let c = blinn_phong(&m, &light, unit(&mut rng), unit(&mut rng), albedo);
+            let (n, v) = (unit(&mut rng), unit(&mut rng));
+            let c = blinn_phong(&m, &light, n, v, albedo);
+            let fast = BlinnPhong::new(m, light).unwrap().shade(n, v, albedo);
+            for k in 0..3 {
+                assert!(
+                    (fast[k] - c[k]).abs() <= SPECULAR_CUTOFF * 1.01,
+                    "{fast:?} vs {c:?}"
+                );
+            }
             for v in c {
                 assert!((0.0..=1.0 + 1e-5).contains(&v), "{v} from {m:?} {light:?}");
                 max_seen = max_seen.max(v);

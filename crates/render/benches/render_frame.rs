@@ -1,0 +1,112 @@
+//! Speed of Algorithm 3 on a 1280×720 frame of a 30k-triangle textured, shaded mesh (issue 4
+//! target: ≤ 10 ms on the 2-core build machine), and of the depth-only ground-truth path.
+//!
+//! The mesh is a bumpy, face-like height field (124 × 123 vertices, 30 012 triangles) seen from
+//! 0.5 m, covering about half of the frame; texture 1024², default material and light.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use visage_camera::{DepthKind, Intrinsics};
+use visage_mesh::TriMesh;
+use visage_render::{
+    render_depth_with, Albedo, Camera, CullMode, Frame, Mat4, Rasterizer, Renderer, Scene, Texture,
+    Wrap,
+};
+
+fn face_like_mesh() -> TriMesh {
+    let (nu, nv) = (124u32, 123u32);
+    let (w, h) = (0.5, 0.28);
+    let mut m = TriMesh::default();
+    for j in 0..nv {
+        for i in 0..nu {
+            let (s, t) = (i as f64 / (nu - 1) as f64, j as f64 / (nv - 1) as f64);
+            let (x, y) = ((s - 0.5) * w, (t - 0.5) * h);
+            // A dome with ripples: depth varies by a few centimetres like a face.
+            let z = 0.5 + 4.0 * (x * x + y * y) - 0.01 * (40.0 * x).sin() * (30.0 * y).cos();
+            m.vertices.push([x, y, z]);
+            m.uvs.push([s, 1.0 - t]);
+        }
+    }
+    for j in 0..nv - 1 {
+        for i in 0..nu - 1 {
+            let a = j * nu + i;
+            let (b, c, d) = (a + 1, a + nu + 1, a + nu);
+            m.triangles.push([a, c, b]);
+            m.triangles.push([a, d, c]);
+        }
+    }
+    m
+}
+
+fn texture() -> Texture {
+    let n = 1024u32;
+    let texels = (0..n * n)
+        .map(|k| {
+            let (i, j) = (k % n, k / n);
+            let c = if (i / 64 + j / 64) % 2 == 0 { 0.8 } else { 0.3 };
+            [c, 0.6 * c, 0.5 * c, 1.0]
+        })
+        .collect();
+    Texture::new(n, n, texels).expect("valid texture")
+}
+
+fn bench(c: &mut Criterion) {
+    let k = Intrinsics::new(1280, 720, 1000.0, 1000.0, 639.5, 359.5).expect("valid intrinsics");
+    let camera = Camera::new(k).expect("valid camera");
+    let mesh = face_like_mesh();
+    assert_eq!(mesh.triangles.len(), 30_012);
+    let tex = texture();
+    let scene = Scene {
+        albedo: Albedo::Texture {
+            texture: &tex,
+            wrap: Wrap::Clamp,
+        },
+        ..Scene::default()
+    };
+    let mut renderer = Renderer::new();
+    let mut frame = Frame::new(k.width, k.height, DepthKind::Z);
+    renderer
+        .render(&mesh, &camera, &Mat4::IDENTITY, &scene, &mut frame)
+        .expect("renders");
+    let covered = frame.depth.valid_count();
+    eprintln!(
+        "render_frame: {} triangles, {covered} of {} pixels covered ({:.0}%), {} rayon threads",
+        mesh.triangles.len(),
+        frame.color.len(),
+        100.0 * covered as f64 / frame.color.len() as f64,
+        rayon::current_num_threads()
+    );
+    // Headline: colour + depth images (what `visage render` writes).
+    let mut images = Frame::color_and_depth(k.width, k.height, DepthKind::Z);
+    c.bench_function("textured_shaded_1280x720_30k_tris", |b| {
+        b.iter(|| {
+            renderer
+                .render(&mesh, &camera, &Mat4::IDENTITY, &scene, &mut images)
+                .expect("renders")
+        })
+    });
+    // Every buffer: adds triangle ids and barycentrics.
+    c.bench_function("textured_shaded_all_buffers_1280x720_30k_tris", |b| {
+        b.iter(|| {
+            renderer
+                .render(&mesh, &camera, &Mat4::IDENTITY, &scene, &mut frame)
+                .expect("renders")
+        })
+    });
+    let mut rasterizer = Rasterizer::new();
+    c.bench_function("depth_only_1280x720_30k_tris", |b| {
+        b.iter(|| {
+            render_depth_with(
+                &mut rasterizer,
+                &mesh,
+                &camera,
+                &Mat4::IDENTITY,
+                DepthKind::Z,
+                CullMode::None,
+            )
+            .expect("renders")
+        })
+    });
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
