@@ -37,7 +37,12 @@ impl DepthMap {
     #[inline]
     #[track_caller]
     pub fn at(&self, u: u32, v: u32) -> f32 {
-        assert!(u < self.width && v < self.height, "pixel ({u}, {v}) outside {}×{}", self.width, self.height);
+        assert!(
+            u < self.width && v < self.height,
+            "pixel ({u}, {v}) outside {}×{}",
+            self.width,
+            self.height
+        );
         self.data[v as usize * self.width as usize + u as usize]
     }
 
@@ -66,7 +71,10 @@ impl DepthMap {
             (0, 1, (1.0 - fu) * fv),
             (1, 1, fu * fv),
         ] {
-            let (uu, vv) = ((u0 + du).min(self.width - 1), (v0 + dv).min(self.height - 1));
+            let (uu, vv) = (
+                (u0 + du).min(self.width - 1),
+                (v0 + dv).min(self.height - 1),
+            );
             let d = self.at(uu, vv);
             if wgt > 0.0 && Self::is_valid(d) {
                 sum += wgt * d as f64;

@@ -35,7 +35,11 @@ pub fn read_depth_png(path: &Path, scale: f64, kind: DepthKind) -> Result<DepthM
         width: buf.width(),
         height: buf.height(),
         kind,
-        data: buf.as_raw().iter().map(|&v| (v as f64 * inv) as f32).collect(),
+        data: buf
+            .as_raw()
+            .iter()
+            .map(|&v| (v as f64 * inv) as f32)
+            .collect(),
     })
 }
 
@@ -53,10 +57,12 @@ pub fn write_depth_png(path: &Path, depth: &DepthMap, scale: f64) -> Result<(), 
             }
         })
         .collect();
-    let buf: ImageBuffer<Luma<u16>, Vec<u16>> = ImageBuffer::from_raw(depth.width, depth.height, pixels)
-        .ok_or_else(|| CameraError::DepthImage {
-            path: path.to_owned(),
-            reason: "pixel count does not match the image size".into(),
+    let buf: ImageBuffer<Luma<u16>, Vec<u16>> =
+        ImageBuffer::from_raw(depth.width, depth.height, pixels).ok_or_else(|| {
+            CameraError::DepthImage {
+                path: path.to_owned(),
+                reason: "pixel count does not match the image size".into(),
+            }
         })?;
     buf.save(path).map_err(|e| CameraError::DepthImage {
         path: path.to_owned(),
@@ -88,7 +94,9 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("eight.png");
         image::GrayImage::new(2, 2).save(&path).unwrap();
-        let err = read_depth_png(&path, 1000.0, DepthKind::Z).unwrap_err().to_string();
+        let err = read_depth_png(&path, 1000.0, DepthKind::Z)
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("eight.png") && err.contains("16-bit"), "{err}");
     }
 }

@@ -23,8 +23,22 @@ pub struct Intrinsics {
 
 impl Intrinsics {
     /// Validated intrinsics: sizes and focal lengths positive, every value finite.
-    pub fn new(width: u32, height: u32, fx: f64, fy: f64, cx: f64, cy: f64) -> Result<Self, CameraError> {
-        let k = Intrinsics { width, height, fx, fy, cx, cy };
+    pub fn new(
+        width: u32,
+        height: u32,
+        fx: f64,
+        fy: f64,
+        cx: f64,
+        cy: f64,
+    ) -> Result<Self, CameraError> {
+        let k = Intrinsics {
+            width,
+            height,
+            fx,
+            fy,
+            cx,
+            cy,
+        };
         k.validate()?;
         Ok(k)
     }
@@ -138,7 +152,10 @@ impl Intrinsics {
     /// Pixel position of camera-space point `p` (requires `p[2] > 0`).
     #[inline]
     pub fn project(&self, p: [f64; 3]) -> [f64; 2] {
-        [self.fx * p[0] / p[2] + self.cx, self.fy * p[1] / p[2] + self.cy]
+        [
+            self.fx * p[0] / p[2] + self.cx,
+            self.fy * p[1] / p[2] + self.cy,
+        ]
     }
 
     /// Mean focal length in pixels, the pixel-per-radian scale used to make λ resolution-free.
@@ -191,7 +208,11 @@ mod tests {
         let k = Intrinsics::new(640, 480, 525.0, 525.0, 319.5, 239.5).unwrap();
         k.save_json(&path).unwrap();
         assert_eq!(Intrinsics::load_json(&path).unwrap(), k);
-        std::fs::write(&path, r#"{"width": 640, "height": 480, "fx": -1, "fy": 1, "cx": 0, "cy": 0}"#).unwrap();
+        std::fs::write(
+            &path,
+            r#"{"width": 640, "height": 480, "fx": -1, "fy": 1, "cx": 0, "cy": 0}"#,
+        )
+        .unwrap();
         let err = Intrinsics::load_json(&path).unwrap_err().to_string();
         assert!(err.contains("fx"), "{err}");
         std::fs::write(&path, "{").unwrap();

@@ -31,7 +31,8 @@ fn write_sequence(dir: &Path, frames: usize, empty_frame: Option<usize>) {
         for v in 0..H {
             for u in 0..W {
                 let (xn, yn) = ((u as f64 - k.cx) / k.fx, (v as f64 - k.cy) / k.fy);
-                let noise: f64 = (0..4).map(|_| rng.random_range(-0.004..0.004)).sum::<f64>() * 0.85;
+                let noise: f64 =
+                    (0..4).map(|_| rng.random_range(-0.004..0.004)).sum::<f64>() * 0.85;
                 let hole = (u as i64 - 30 - 3 * f as i64).pow(2) + (v as i64 - 36).pow(2) < 36;
                 if !hole && Some(f) != empty_frame {
                     d.data[(v * W + u) as usize] = (surface(xn, yn, f) + noise) as f32;
@@ -43,7 +44,10 @@ fn write_sequence(dir: &Path, frames: usize, empty_frame: Option<usize>) {
 }
 
 fn visage(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_visage")).args(args).output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_visage"))
+        .args(args)
+        .output()
+        .unwrap()
 }
 
 fn s(p: &Path) -> &str {
@@ -80,17 +84,37 @@ fn fuse_beats_raw_back_projection_in_both_modes() {
     let (tmp, depth, cam) = setup_dir(6, None);
     for mode in ["streaming", "clip"] {
         let out = tmp.path().join(mode);
-        let o = visage(&["fuse", "--depth", s(&depth), "--intrinsics", s(&cam), "--out", s(&out), "--mode", mode, "--save-raw", "--quiet"]);
-        assert!(o.status.success(), "{mode}: {}", String::from_utf8_lossy(&o.stderr));
+        let o = visage(&[
+            "fuse",
+            "--depth",
+            s(&depth),
+            "--intrinsics",
+            s(&cam),
+            "--out",
+            s(&out),
+            "--mode",
+            mode,
+            "--save-raw",
+            "--quiet",
+        ]);
+        assert!(
+            o.status.success(),
+            "{mode}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
         let (mut fused, mut raw) = (0.0, 0.0);
         for f in 0..6 {
             let name = format!("{f:06}.ply");
             fused += surface_error(&out.join("meshes").join(&name), f);
             raw += surface_error(&out.join("raw").join(&name), f);
         }
-        assert!(fused < 0.7 * raw, "{mode}: fused error {fused} vs raw {raw}");
+        assert!(
+            fused < 0.7 * raw,
+            "{mode}: fused error {fused} vs raw {raw}"
+        );
         let metrics: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
+            serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap())
+                .unwrap();
         assert_eq!(metrics["status"], "complete");
         assert_eq!(metrics["frames"].as_array().unwrap().len(), 6);
         assert!(metrics["solver"]["factor_nnz"].as_u64().unwrap() > 0);
@@ -98,7 +122,12 @@ fn fuse_beats_raw_back_projection_in_both_modes() {
         assert!(frame["relative_residual"].as_f64().unwrap() < 1e-7);
         assert!(frame["curvature_improvement"].as_f64().unwrap() > 1.0);
         assert!(frame["roughness"].as_f64().unwrap() < frame["roughness_raw"].as_f64().unwrap());
-        assert!(!out.join("meshes").read_dir().unwrap().any(|e| e.unwrap().path().extension().unwrap() == "tmp"));
+        assert!(!out.join("meshes").read_dir().unwrap().any(|e| e
+            .unwrap()
+            .path()
+            .extension()
+            .unwrap()
+            == "tmp"));
     }
 }
 
@@ -106,7 +135,16 @@ fn fuse_beats_raw_back_projection_in_both_modes() {
 fn a_frame_without_depth_is_carried_and_counted() {
     let (tmp, depth, cam) = setup_dir(4, Some(2));
     let out = tmp.path().join("out");
-    let o = visage(&["fuse", "--depth", s(&depth), "--intrinsics", s(&cam), "--out", s(&out), "--quiet"]);
+    let o = visage(&[
+        "fuse",
+        "--depth",
+        s(&depth),
+        "--intrinsics",
+        s(&cam),
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stderr).contains("depth_002.png"));
     let metrics: serde_json::Value =
@@ -147,11 +185,18 @@ fn bad_input_is_reported_with_the_file_and_exit_code_2() {
     assert_bad_input(&run(base(&missing, &cam)), "nowhere");
     // Intrinsics for another image size.
     let other = tmp.path().join("other.json");
-    Intrinsics::from_fov(640, 480, 60.0).unwrap().save_json(&other).unwrap();
+    Intrinsics::from_fov(640, 480, 60.0)
+        .unwrap()
+        .save_json(&other)
+        .unwrap();
     assert_bad_input(&run(base(&depth, &other)), "640×480");
     // Non-positive focal length.
     let bad = tmp.path().join("bad.json");
-    std::fs::write(&bad, r#"{"width": 96, "height": 72, "fx": 0, "fy": 100, "cx": 47.5, "cy": 35.5}"#).unwrap();
+    std::fs::write(
+        &bad,
+        r#"{"width": 96, "height": 72, "fx": 0, "fy": 100, "cx": 47.5, "cy": 35.5}"#,
+    )
+    .unwrap();
     assert_bad_input(&run(base(&depth, &bad)), "fx");
     // Negative λ.
     let mut args = base(&depth, &cam);
@@ -163,11 +208,18 @@ fn bad_input_is_reported_with_the_file_and_exit_code_2() {
     // A frame of another size, and an 8-bit frame: named, and nothing written.
     let mixed = tmp.path().join("mixed");
     write_sequence(&mixed, 2, None);
-    write_depth_png(&mixed.join("depth_005.png"), &DepthMap::empty(10, 10, DepthKind::Z), 1000.0).unwrap();
+    write_depth_png(
+        &mixed.join("depth_005.png"),
+        &DepthMap::empty(10, 10, DepthKind::Z),
+        1000.0,
+    )
+    .unwrap();
     assert_bad_input(&run(base(&mixed, &cam)), "depth_005.png");
     assert!(!out.join("metrics.json").exists());
     std::fs::remove_file(mixed.join("depth_005.png")).unwrap();
-    image::GrayImage::new(W, H).save(mixed.join("depth_006.png")).unwrap();
+    image::GrayImage::new(W, H)
+        .save(mixed.join("depth_006.png"))
+        .unwrap();
     assert_bad_input(&run(base(&mixed, &cam)), "depth_006.png");
     // A folder without frames.
     let empty = tmp.path().join("empty");

@@ -5,7 +5,10 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use faer::Mat;
 use visage_camera::Intrinsics;
 use visage_fem::domain::domain_coordinates;
-use visage_fem::{biharmonic, cotan_laplacian, lumped_mass, mass_matrix, Factorization, FusionSystem, Operators, PixelQuadrature, StreamingSolver, Weights};
+use visage_fem::{
+    biharmonic, cotan_laplacian, lumped_mass, mass_matrix, Factorization, FusionSystem, Operators,
+    PixelQuadrature, StreamingSolver, Weights,
+};
 use visage_mesh::{sample_domain, Mask, PlanarMesh, SamplingOptions};
 
 fn system(vertices: usize) -> FusionSystem {
@@ -25,7 +28,9 @@ fn system(vertices: usize) -> FusionSystem {
     let ml = lumped_mass(&xi, &mesh.triangles).expect("M_l");
     let ops = Operators {
         mass: mass_matrix(&xi, &mesh.triangles).expect("M"),
-        data_mass: PixelQuadrature::new(&mesh.points, &mesh.triangles, &k).mass_matrix().expect("M_D"),
+        data_mass: PixelQuadrature::new(&mesh.points, &mesh.triangles, &k)
+            .mass_matrix()
+            .expect("M_D"),
         biharmonic: biharmonic(&l, &ml).expect("K"),
     };
     FusionSystem::new(ops, Weights::default()).expect("SPD")

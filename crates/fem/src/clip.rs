@@ -44,7 +44,12 @@ pub struct ClipReport {
 }
 
 /// Applies the block-tridiagonal clip operator: `y_k = A₀ x_k + μ M (c_k x_k − x_{k−1} − x_{k+1})`.
-pub fn apply_clip_operator(system: &FusionSystem, x: &[Mat<f64>], y: &mut [Mat<f64>], temp: &mut Mat<f64>) {
+pub fn apply_clip_operator(
+    system: &FusionSystem,
+    x: &[Mat<f64>],
+    y: &mut [Mat<f64>],
+    temp: &mut Mat<f64>,
+) {
     let t = x.len();
     let mu = system.weights.mu;
     for k in 0..t {
@@ -94,10 +99,18 @@ fn axpy(alpha: f64, x: &[Mat<f64>], y: &mut [Mat<f64>]) {
 /// # Panics
 /// If `b` and `x` differ in length or a block is not #V × 3.
 #[track_caller]
-pub fn solve_clip(system: &mut FusionSystem, b: &[Mat<f64>], x: &mut [Mat<f64>], options: &ClipOptions) -> ClipReport {
+pub fn solve_clip(
+    system: &mut FusionSystem,
+    b: &[Mat<f64>],
+    x: &mut [Mat<f64>],
+    options: &ClipOptions,
+) -> ClipReport {
     let n = system.dim();
     assert!(b.len() == x.len());
-    assert!(b.iter().chain(x.iter()).all(|m| m.nrows() == n && m.ncols() == 3));
+    assert!(b
+        .iter()
+        .chain(x.iter())
+        .all(|m| m.nrows() == n && m.ncols() == 3));
     let t = b.len();
     let zeros = || (0..t).map(|_| Mat::<f64>::zeros(n, 3)).collect::<Vec<_>>();
     let (mut r, mut z, mut q) = (zeros(), zeros(), zeros());

@@ -14,14 +14,20 @@ use crate::FemError;
 /// connected mesh. `(L f)_i = 0` at interior vertices for linear `f`; at boundary vertices
 /// `L f` is the boundary flux (the natural, Neumann condition of (2.6)–(2.7)).
 /// Invariant under scaling of the domain (cotangents are scale-free).
-pub fn cotan_laplacian(points: &[[f64; 2]], triangles: &[[u32; 3]]) -> Result<SparseMatrix, FemError> {
+pub fn cotan_laplacian(
+    points: &[[f64; 2]],
+    triangles: &[[u32; 3]],
+) -> Result<SparseMatrix, FemError> {
     let areas = areas(points, triangles)?;
     let mut triplets = Vec::with_capacity(12 * triangles.len());
     for (t, &area) in triangles.iter().zip(&areas) {
         for k in 0..3 {
             let (i, j) = (t[(k + 1) % 3] as usize, t[(k + 2) % 3] as usize);
             let (pk, pi, pj) = (points[t[k] as usize], points[i], points[j]);
-            let (ei, ej) = ([pi[0] - pk[0], pi[1] - pk[1]], [pj[0] - pk[0], pj[1] - pk[1]]);
+            let (ei, ej) = (
+                [pi[0] - pk[0], pi[1] - pk[1]],
+                [pj[0] - pk[0], pj[1] - pk[1]],
+            );
             // cot of the angle at k = (ei · ej) / |ei × ej|, |ei × ej| = 2·area
             let half_cot = 0.5 * (ei[0] * ej[0] + ei[1] * ej[1]) / (2.0 * area);
             triplets.push(Triplet::new(i, j, -half_cot));

@@ -28,9 +28,15 @@ fn inner(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> f64 {
 
 /// Energy of one frame: data + smoothness, plus `μ‖s − previous‖²_M` when a predecessor is given
 /// (the quantity a streaming step minimises).
-pub fn frame_energy(system: &FusionSystem, s: MatRef<'_, f64>, b: MatRef<'_, f64>, previous: Option<MatRef<'_, f64>>) -> f64 {
+pub fn frame_energy(
+    system: &FusionSystem,
+    s: MatRef<'_, f64>,
+    b: MatRef<'_, f64>,
+    previous: Option<MatRef<'_, f64>>,
+) -> f64 {
     let ops = &system.ops;
-    let mut e = quadratic(&ops.data_mass, s) - 2.0 * inner(b, s) + system.weights.lambda * quadratic(&ops.biharmonic, s);
+    let mut e = quadratic(&ops.data_mass, s) - 2.0 * inner(b, s)
+        + system.weights.lambda * quadratic(&ops.biharmonic, s);
     if let Some(prev) = previous {
         let mut d = s.to_owned();
         d -= prev;

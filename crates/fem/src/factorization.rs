@@ -3,14 +3,29 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
+    SymmetricOrdering,
 };
+use faer::sparse::linalg::SupernodalThreshold;
 use std::sync::Arc;
 
 use faer::{Conj, MatMut, Par, Side};
 
 use crate::sparse::SparseMatrix;
 use crate::FemError;
+
+/// Which sparse Cholesky kernel to use.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FactorVariant {
+    /// faer's choice by estimated flop ratio.
+    #[default]
+    Auto,
+    /// Column-by-column (left-looking) factorisation.
+    Simplicial,
+    /// Dense supernodal blocks.
+    Supernodal,
+}
 
 /// `A = LLᵀ` of a sparse symmetric positive definite matrix with a fill-reducing AMD ordering
 /// (faer's symbolic + numeric factorisation, each done once), single-threaded: at these sizes
@@ -39,13 +54,27 @@ impl Factorization {
     /// Right-hand-side columns a solve can take without allocating (x, y, z).
     pub const MAX_RHS_COLUMNS: usize = 3;
 
-    /// Factors `a` (both triangles stored; the lower one is read).
+    /// Factors `a` (both triangles stored; the lower one is read) with faer's automatic choice
+    /// of kernel.
     pub fn new(a: &SparseMatrix) -> Result<Self, FemError> {
+        Self::with_variant(a, FactorVariant::Auto)
+    }
+
+    /// Factors `a` with the given kernel.
+    pub fn with_variant(a: &SparseMatrix, variant: FactorVariant) -> Result<Self, FemError> {
+        let threshold = match variant {
+            FactorVariant::Auto => SupernodalThreshold::AUTO,
+            FactorVariant::Simplicial => SupernodalThreshold::FORCE_SIMPLICIAL,
+            FactorVariant::Supernodal => SupernodalThreshold::FORCE_SUPERNODAL,
+        };
         let symbolic = factorize_symbolic_cholesky(
             a.symbolic(),
             Side::Lower,
             SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
+            CholeskySymbolicParams {
+                supernodal_flop_ratio_threshold: threshold,
+                ..Default::default()
+            },
         )
         .map_err(|e| FemError::Assembly {
             reason: format!("symbolic Cholesky: {e:?}"),
@@ -69,7 +98,9 @@ impl Factorization {
             });
         }
         let mut values = vec![0.0; symbolic.len_val()];
-        let mut scratch = MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()));
+        let mut scratch = MemBuffer::new(
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+        );
         symbolic
             .factorize_numeric_llt(
                 &mut values,
@@ -83,7 +114,8 @@ impl Factorization {
             .map_err(|e| FemError::NotPositiveDefinite {
                 reason: format!("{e:?}"),
             })?;
-        let workspace = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(Self::MAX_RHS_COLUMNS, Par::Seq));
+        let workspace =
+            MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(Self::MAX_RHS_COLUMNS, Par::Seq));
         Ok(Factorization {
             symbolic,
             values,

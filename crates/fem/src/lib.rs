@@ -31,7 +31,7 @@ pub use clip::{apply_clip_operator, solve_clip, ClipOptions, ClipReport};
 pub use cotan_laplacian::cotan_laplacian;
 pub use energy::{clip_energy, frame_energy};
 pub use error::FemError;
-pub use factorization::Factorization;
+pub use factorization::{FactorVariant, Factorization};
 pub use mass_matrix::{lumped_mass, mass_matrix};
 pub use pixel_quadrature::PixelQuadrature;
 pub use streaming::{StepReport, StreamingSolver};

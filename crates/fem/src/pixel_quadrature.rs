@@ -64,7 +64,8 @@ impl PixelQuadrature {
                     let l1 = ((x - a[0]) * (c[1] - a[1]) - (y - a[1]) * (c[0] - a[0])) / det;
                     let l2 = ((b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])) / det;
                     let l0 = 1.0 - l1 - l2;
-                    if l0 >= -INSIDE_TOLERANCE && l1 >= -INSIDE_TOLERANCE && l2 >= -INSIDE_TOLERANCE {
+                    if l0 >= -INSIDE_TOLERANCE && l1 >= -INSIDE_TOLERANCE && l2 >= -INSIDE_TOLERANCE
+                    {
                         owner[idx] = t as u32;
                         bary_of[idx] = [l0, l1, l2];
                     }
@@ -141,7 +142,13 @@ impl PixelQuadrature {
         assert!(fill.ncols() == 3 && b.ncols() == 3);
         b.fill(0.0);
         let mut valid = 0;
-        for (((&idx, t), l), ray) in self.pixels.iter().zip(&self.corners).zip(&self.bary).zip(&self.rays) {
+        for (((&idx, t), l), ray) in self
+            .pixels
+            .iter()
+            .zip(&self.corners)
+            .zip(&self.bary)
+            .zip(&self.rays)
+        {
             let d = depth.data[idx as usize];
             let x = if DepthMap::is_valid(d) && (d as f64) <= max_depth {
                 valid += 1;

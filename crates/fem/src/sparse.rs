@@ -1,7 +1,7 @@
 //! Small sparse-matrix helpers over faer's compressed-column storage.
 
-use faer::sparse::{SparseColMat, Triplet};
 use faer::reborrow::ReborrowMut;
+use faer::sparse::{SparseColMat, Triplet};
 use faer::{MatMut, MatRef};
 
 use crate::FemError;
@@ -10,7 +10,10 @@ use crate::FemError;
 pub type SparseMatrix = SparseColMat<usize, f64>;
 
 /// Builds an `n × n` matrix from triplets; duplicate entries are summed.
-pub fn from_triplets(n: usize, triplets: &[Triplet<usize, usize, f64>]) -> Result<SparseMatrix, FemError> {
+pub fn from_triplets(
+    n: usize,
+    triplets: &[Triplet<usize, usize, f64>],
+) -> Result<SparseMatrix, FemError> {
     SparseColMat::try_new_from_triplets(n, n, triplets).map_err(|e| FemError::Assembly {
         reason: format!("{e:?}"),
     })
@@ -43,14 +46,29 @@ pub fn for_each_entry(a: &SparseMatrix, mut f: impl FnMut(usize, usize, f64)) {
 /// # Panics
 /// If the shapes disagree or `x`, `y` are not column-major.
 #[track_caller]
-pub fn sym_matmul(a: &SparseMatrix, x: MatRef<'_, f64>, alpha: f64, beta: f64, mut y: MatMut<'_, f64>) {
+pub fn sym_matmul(
+    a: &SparseMatrix,
+    x: MatRef<'_, f64>,
+    alpha: f64,
+    beta: f64,
+    mut y: MatMut<'_, f64>,
+) {
     assert!(x.nrows() == a.ncols() && y.nrows() == a.nrows() && x.ncols() == y.ncols());
     let col_ptr = a.symbolic().col_ptr();
     let row_idx = a.symbolic().row_idx();
     let val = a.val();
     for c in 0..x.ncols() {
-        let xc = x.col(c).try_as_col_major().expect("column-major x").as_slice();
-        let yc = y.rb_mut().col_mut(c).try_as_col_major_mut().expect("column-major y").as_slice_mut();
+        let xc = x
+            .col(c)
+            .try_as_col_major()
+            .expect("column-major x")
+            .as_slice();
+        let yc = y
+            .rb_mut()
+            .col_mut(c)
+            .try_as_col_major_mut()
+            .expect("column-major y")
+            .as_slice_mut();
         for (i, yi) in yc.iter_mut().enumerate() {
             // A symmetric: row i of A = column i.
             let range = col_ptr[i]..col_ptr[i + 1];
@@ -59,7 +77,11 @@ pub fn sym_matmul(a: &SparseMatrix, x: MatRef<'_, f64>, alpha: f64, beta: f64, m
                 .zip(&val[range])
                 .map(|(&r, &v)| v * xc[r])
                 .sum();
-            *yi = if beta == 0.0 { alpha * acc } else { alpha * acc + beta * *yi };
+            *yi = if beta == 0.0 {
+                alpha * acc
+            } else {
+                alpha * acc + beta * *yi
+            };
         }
     }
 }

@@ -74,8 +74,12 @@ impl StreamingSolver {
         let temporal = self.has_previous && self.system.weights.mu > 0.0;
         self.rhs.copy_from(b);
         if temporal {
-            self.system
-                .apply_mass(self.previous.as_ref(), self.system.weights.mu, 1.0, self.rhs.as_mut());
+            self.system.apply_mass(
+                self.previous.as_ref(),
+                self.system.weights.mu,
+                1.0,
+                self.rhs.as_mut(),
+            );
         }
         out.copy_from(&self.rhs);
         let factor = if temporal {

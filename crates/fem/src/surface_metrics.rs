@@ -38,7 +38,11 @@ fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
@@ -89,13 +93,13 @@ impl SurfaceMetrics {
                 let half_cot = 0.5 * dot(ei, ej) / double_area;
                 let d = sub(p[i], p[j]);
                 let (vi, vj) = (t[i] as usize, t[j] as usize);
-                for c in 0..3 {
-                    self.laplace[vi][c] += half_cot * d[c];
-                    self.laplace[vj][c] -= half_cot * d[c];
+                for (c, dc) in d.iter().enumerate() {
+                    self.laplace[vi][c] += half_cot * dc;
+                    self.laplace[vj][c] -= half_cot * dc;
                 }
                 self.area[t[k] as usize] += double_area / 6.0;
-                for c in 0..3 {
-                    self.normals[t[k] as usize][c] += n[c];
+                for (acc, nc) in self.normals[t[k] as usize].iter_mut().zip(n) {
+                    *acc += nc;
                 }
             }
         }

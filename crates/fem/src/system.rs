@@ -68,7 +68,10 @@ impl FusionSystem {
     pub fn new(ops: Operators, weights: Weights) -> Result<Self, FemError> {
         weights.validate()?;
         let n = ops.mass.nrows();
-        for (what, m) in [("data mass", &ops.data_mass), ("biharmonic", &ops.biharmonic)] {
+        for (what, m) in [
+            ("data mass", &ops.data_mass),
+            ("biharmonic", &ops.biharmonic),
+        ] {
             if m.nrows() != n {
                 return Err(FemError::Dimension {
                     what,
@@ -78,10 +81,15 @@ impl FusionSystem {
             }
         }
         let (l, mu) = (weights.lambda, weights.mu);
-        let a_temporal = linear_combination(&[(1.0, &ops.data_mass), (l, &ops.biharmonic), (mu, &ops.mass)])?;
+        let a_temporal =
+            linear_combination(&[(1.0, &ops.data_mass), (l, &ops.biharmonic), (mu, &ops.mass)])?;
         // Same pattern as `a_temporal` (M's entries kept with weight 0) so the symbolic
         // analysis is shared.
-        let a_reset = linear_combination(&[(1.0, &ops.data_mass), (l, &ops.biharmonic), (0.0, &ops.mass)])?;
+        let a_reset = linear_combination(&[
+            (1.0, &ops.data_mass),
+            (l, &ops.biharmonic),
+            (0.0, &ops.mass),
+        ])?;
         if a_reset.symbolic().col_ptr() != a_temporal.symbolic().col_ptr()
             || a_reset.symbolic().row_idx() != a_temporal.symbolic().row_idx()
         {
@@ -131,7 +139,11 @@ impl FusionSystem {
 
     /// `y ← A x` (temporal) or `y ← A₀ x`; x, y #V × 3.
     pub fn apply(&self, temporal: bool, x: MatRef<'_, f64>, y: MatMut<'_, f64>) {
-        let a = if temporal { &self.a_temporal } else { &self.a_reset };
+        let a = if temporal {
+            &self.a_temporal
+        } else {
+            &self.a_reset
+        };
         sym_matmul(a, x, 1.0, 0.0, y);
     }
 

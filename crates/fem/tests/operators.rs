@@ -13,18 +13,35 @@ fn corpus() -> Vec<(String, PlanarMesh)> {
         let mut m = Mask::filled(40, 36, false);
         for v in 0..36u32 {
             for u in 0..40u32 {
-                m.data[(v * 40 + u) as usize] = (u as f64 - 20.0).powi(2) + (v as f64 - 18.0).powi(2) < 15.0 * 15.0;
+                m.data[(v * 40 + u) as usize] =
+                    (u as f64 - 20.0).powi(2) + (v as f64 - 18.0).powi(2) < 15.0 * 15.0;
             }
         }
         m
     };
     for (name, mask, spacing) in [("rect", Mask::filled(21, 17, true), 4), ("disc", disc, 3)] {
-        let s = sample_domain(&mask, None, &SamplingOptions { spacing, ..Default::default() }).unwrap();
+        let s = sample_domain(
+            &mask,
+            None,
+            &SamplingOptions {
+                spacing,
+                ..Default::default()
+            },
+        )
+        .unwrap();
         out.push((name.to_string(), PlanarMesh::triangulate(&s).unwrap()));
     }
     // An irregular mesh: jittered interior points.
     let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let s = sample_domain(&Mask::filled(30, 30, true), None, &SamplingOptions { spacing: 5, ..Default::default() }).unwrap();
+    let s = sample_domain(
+        &Mask::filled(30, 30, true),
+        None,
+        &SamplingOptions {
+            spacing: 5,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let mut mesh = PlanarMesh::triangulate(&s).unwrap();
     let boundary = mesh.boundary_vertices();
     for (p, b) in mesh.points.iter_mut().zip(&boundary) {
@@ -50,7 +67,11 @@ fn max_abs(a: &SparseMatrix) -> f64 {
 fn assert_symmetric(name: &str, a: &SparseMatrix) {
     let tol = 1e-12 * max_abs(a);
     for_each_entry(a, |i, j, v| {
-        assert!((v - entry(a, j, i)).abs() <= tol, "{name}: ({i},{j}) = {v} vs {}", entry(a, j, i));
+        assert!(
+            (v - entry(a, j, i)).abs() <= tol,
+            "{name}: ({i},{j}) = {v} vs {}",
+            entry(a, j, i)
+        );
     });
 }
 
@@ -84,27 +105,46 @@ fn laplacian_mass_and_biharmonic_properties_hold_at_every_scale() {
             assert_symmetric(&format!("{name} L"), &l);
             let lmax = max_abs(&l);
             let ones = vec![1.0; n];
-            assert!(apply(&l, &ones).iter().all(|r| r.abs() <= 1e-12 * lmax), "{name}: L rows must sum to 0");
-            let linear: Vec<f64> = p.iter().map(|q| 0.3 * q[0] - 1.7 * q[1] + 2.0 * scale).collect();
+            assert!(
+                apply(&l, &ones).iter().all(|r| r.abs() <= 1e-12 * lmax),
+                "{name}: L rows must sum to 0"
+            );
+            let linear: Vec<f64> = p
+                .iter()
+                .map(|q| 0.3 * q[0] - 1.7 * q[1] + 2.0 * scale)
+                .collect();
             let fmax = linear.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             let lf = apply(&l, &linear);
             for i in (0..n).filter(|&i| !boundary[i]) {
-                assert!(lf[i].abs() <= 1e-10 * lmax * fmax, "{name}: (L f)_{i} = {} for linear f", lf[i]);
+                assert!(
+                    lf[i].abs() <= 1e-10 * lmax * fmax,
+                    "{name}: (L f)_{i} = {} for linear f",
+                    lf[i]
+                );
             }
-            assert!(lf.iter().any(|v| v.abs() > 1e-6 * lmax * fmax), "{name}: boundary flux of a linear f must show");
+            assert!(
+                lf.iter().any(|v| v.abs() > 1e-6 * lmax * fmax),
+                "{name}: boundary flux of a linear f must show"
+            );
 
             // M: symmetric, sums to the area; lumped mass likewise.
             assert_symmetric(&format!("{name} M"), &m);
             let area = mesh.area() * scale * scale;
             let mut total = 0.0;
             for_each_entry(&m, |_, _, v| total += v);
-            assert!((total - area).abs() <= 1e-10 * area, "{name}: ΣM = {total}, area {area}");
+            assert!(
+                (total - area).abs() <= 1e-10 * area,
+                "{name}: ΣM = {total}, area {area}"
+            );
             assert!((ml.iter().sum::<f64>() - area).abs() <= 1e-10 * area);
 
             // K: symmetric positive semi-definite with exactly the constants as null space.
             assert_symmetric(&format!("{name} K"), &k);
             let kmax = max_abs(&k);
-            assert!(apply(&k, &ones).iter().all(|r| r.abs() <= 1e-10 * kmax), "{name}: K·1 ≠ 0");
+            assert!(
+                apply(&k, &ones).iter().all(|r| r.abs() <= 1e-10 * kmax),
+                "{name}: K·1 ≠ 0"
+            );
             let kd = dense(&k);
             let mut with_constants = kd.clone();
             // K + c·11ᵀ is positive definite iff null(K) = span{1} (K is PSD).
@@ -114,16 +154,25 @@ fn laplacian_mass_and_biharmonic_properties_hold_at_every_scale() {
                     with_constants[(i, j)] += c;
                 }
             }
-            assert!(with_constants.llt(faer::Side::Lower).is_ok(), "{name}: K has a null space beyond constants");
+            assert!(
+                with_constants.llt(faer::Side::Lower).is_ok(),
+                "{name}: K has a null space beyond constants"
+            );
             let eigen = kd.self_adjoint_eigenvalues(faer::Side::Lower).unwrap();
             let lowest = eigen.iter().cloned().fold(f64::INFINITY, f64::min);
-            assert!(lowest >= -1e-10 * kmax, "{name}: K has a negative eigenvalue {lowest}");
+            assert!(
+                lowest >= -1e-10 * kmax,
+                "{name}: K has a negative eigenvalue {lowest}"
+            );
             let second = {
                 let mut e = eigen.clone();
                 e.sort_by(|a, b| a.partial_cmp(b).unwrap());
                 e[1]
             };
-            assert!(second > 1e-9 * kmax, "{name}: second eigenvalue {second} (null space too large)");
+            assert!(
+                second > 1e-9 * kmax,
+                "{name}: second eigenvalue {second} (null space too large)"
+            );
         }
     }
 }
@@ -136,7 +185,9 @@ fn random_quadratic_forms_are_non_negative() {
     let k = biharmonic(&l, &ml).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     for _ in 0..50 {
-        let f: Vec<f64> = (0..mesh.points.len()).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let f: Vec<f64> = (0..mesh.points.len())
+            .map(|_| rng.random_range(-1.0..1.0))
+            .collect();
         let kf = apply(&k, &f);
         let q: f64 = f.iter().zip(&kf).map(|(a, b)| a * b).sum();
         assert!(q > 0.0, "fᵀKf = {q} for a random non-constant f");
@@ -146,6 +197,8 @@ fn random_quadratic_forms_are_non_negative() {
 #[test]
 fn degenerate_triangles_are_reported_with_their_index() {
     let points = [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [0.0, 1.0]];
-    let err = mass_matrix(&points, &[[0, 1, 3], [0, 1, 2]]).unwrap_err().to_string();
+    let err = mass_matrix(&points, &[[0, 1, 3], [0, 1, 2]])
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("triangle 1"), "{err}");
 }

@@ -6,7 +6,9 @@ use common::{max_abs_diff, rms_diff, setup};
 use faer::Mat;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use visage_fem::{apply_clip_operator, clip_energy, frame_energy, solve_clip, ClipOptions, StreamingSolver};
+use visage_fem::{
+    apply_clip_operator, clip_energy, frame_energy, solve_clip, ClipOptions, StreamingSolver,
+};
 
 fn smooth(xn: f64, yn: f64) -> f64 {
     0.6 + 0.08 * (xn * 3.0).cos() * (yn * 2.5).sin() + 0.1 * (xn * xn + yn * yn)
@@ -34,7 +36,11 @@ fn streaming_step_residual_is_tiny() {
     for (k, b) in bs.iter().enumerate() {
         let r = solver.step(b.as_ref(), x.as_mut());
         assert_eq!(r.temporal, k > 0);
-        assert!(r.relative_residual <= 1e-10, "frame {k}: residual {}", r.relative_residual);
+        assert!(
+            r.relative_residual <= 1e-10,
+            "frame {k}: residual {}",
+            r.relative_residual
+        );
     }
 }
 
@@ -63,7 +69,10 @@ fn smooth_surface_error_falls_with_refinement() {
         errors.push(rms_diff(&x, &s.truth(smooth)));
     }
     assert!(errors[0] < 1e-3, "coarse error {} m", errors[0]);
-    assert!(errors[1] < 0.6 * errors[0] && errors[2] < 0.6 * errors[1], "errors {errors:?}");
+    assert!(
+        errors[1] < 0.6 * errors[0] && errors[2] < 0.6 * errors[1],
+        "errors {errors:?}"
+    );
 }
 
 #[test]
@@ -116,9 +125,16 @@ fn clip_mode_solves_the_block_system_and_beats_streaming_energy() {
             }
         }
     }
-    assert!((num / den).sqrt() <= 1e-10, "block residual {}", (num / den).sqrt());
+    assert!(
+        (num / den).sqrt() <= 1e-10,
+        "block residual {}",
+        (num / den).sqrt()
+    );
     let e_clip = clip_energy(&system, &clip, &bs);
-    assert!(e_clip < e_streaming, "clip energy {e_clip} ≥ streaming {e_streaming}");
+    assert!(
+        e_clip < e_streaming,
+        "clip energy {e_clip} ≥ streaming {e_streaming}"
+    );
     // Clip mode from a zero start reaches the same minimiser.
     let mut from_zero: Vec<Mat<f64>> = (0..bs.len()).map(|_| Mat::zeros(n, 3)).collect();
     let r = solve_clip(&mut system, &bs, &mut from_zero, &options);
@@ -151,7 +167,10 @@ fn random_perturbations_never_lower_the_energy() {
                 }
             }
             let e = frame_energy(&system, y.as_ref(), bs[1].as_ref(), Some(prev.as_ref()));
-            assert!(e >= e0, "streaming energy fell from {e0} to {e} (scale {scale})");
+            assert!(
+                e >= e0,
+                "streaming energy fell from {e0} to {e} (scale {scale})"
+            );
         }
     }
     // Clip: the whole-sequence energy.
@@ -177,7 +196,8 @@ fn random_perturbations_never_lower_the_energy() {
 fn negative_or_non_finite_weights_are_rejected() {
     let s = setup(16, 16, 4);
     for (l, m) in [(-1.0, 1.0), (1.0, f64::NAN), (f64::INFINITY, 0.0)] {
-        let err = visage_fem::FusionSystem::new(s.ops.clone(), visage_fem::Weights { lambda: l, mu: m });
+        let err =
+            visage_fem::FusionSystem::new(s.ops.clone(), visage_fem::Weights { lambda: l, mu: m });
         assert!(err.is_err());
     }
 }

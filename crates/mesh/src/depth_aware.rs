@@ -110,7 +110,10 @@ pub fn flip_depth_aware(mesh: &mut PlanarMesh, positions: &[[f64; 3]]) -> Result
             let dy = p(d)[1] - p(c)[1];
             dx * dx + dy * dy
         };
-        if !(oa * ob < 0.0 && oa.abs() > FLIP_TOLERANCE * scale && ob.abs() > FLIP_TOLERANCE * scale) {
+        if !(oa * ob < 0.0
+            && oa.abs() > FLIP_TOLERANCE * scale
+            && ob.abs() > FLIP_TOLERANCE * scale)
+        {
             continue; // the image-plane quadrilateral is not strictly convex
         }
         mesh.triangles[t1] = oriented(&mesh.points, [c, d, a]);
@@ -126,7 +129,12 @@ pub fn flip_depth_aware(mesh: &mut PlanarMesh, positions: &[[f64; 3]]) -> Result
                 }
             }
         }
-        stack.extend([edge_key(a, c), edge_key(b, c), edge_key(a, d), edge_key(b, d)]);
+        stack.extend([
+            edge_key(a, c),
+            edge_key(b, c),
+            edge_key(a, d),
+            edge_key(b, d),
+        ]);
         flips += 1;
         if flips >= max_flips {
             break;

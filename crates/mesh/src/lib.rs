@@ -25,5 +25,8 @@ pub use error::MeshError;
 pub use mask::Mask;
 pub use one_ring::OneRing;
 pub use planar_mesh::{orient2d, PlanarMesh};
-pub use sampling::{sample_domain, CellGrid, Samples, SamplingOptions, DEFAULT_REFINE_TOLERANCE_M, MIN_CELL_COVERAGE};
+pub use sampling::{
+    sample_domain, CellGrid, Samples, SamplingOptions, DEFAULT_REFINE_TOLERANCE_M,
+    MIN_CELL_COVERAGE,
+};
 pub use trimesh::TriMesh;

@@ -27,7 +27,11 @@ impl PlanarMesh {
     /// Constrained Delaunay triangulation of `samples` with the domain boundary as constraint
     /// edges (spade's bulk loader), keeping the triangles inside the domain.
     pub fn triangulate(samples: &Samples) -> Result<Self, MeshError> {
-        let vertices: Vec<Point2<f64>> = samples.points.iter().map(|p| Point2::new(p[0], p[1])).collect();
+        let vertices: Vec<Point2<f64>> = samples
+            .points
+            .iter()
+            .map(|p| Point2::new(p[0], p[1]))
+            .collect();
         let edges: Vec<[usize; 2]> = samples
             .constraint_edges
             .iter()
@@ -35,8 +39,8 @@ impl PlanarMesh {
             .collect();
         let cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::bulk_load_cdt(vertices, edges)
             .map_err(|e| MeshError::Triangulation {
-                reason: format!("{e:?}"),
-            })?;
+            reason: format!("{e:?}"),
+        })?;
         if cdt.num_vertices() != samples.points.len() {
             return Err(MeshError::Triangulation {
                 reason: format!(

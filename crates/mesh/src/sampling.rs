@@ -109,7 +109,10 @@ pub struct Samples {
 
 fn grid_lines(size: u32, spacing: u32) -> Vec<f64> {
     let last = size - 1;
-    let mut lines: Vec<f64> = (0..=last).step_by(spacing as usize).map(f64::from).collect();
+    let mut lines: Vec<f64> = (0..=last)
+        .step_by(spacing as usize)
+        .map(f64::from)
+        .collect();
     if lines.last() != Some(&(last as f64)) {
         lines.push(last as f64);
     }
@@ -295,7 +298,11 @@ mod tests {
         for v in 0..65 {
             for u in 0..65 {
                 // a plane on the left half, a sharp bump on the right
-                let bump = if u > 40 { 0.05 * ((u as f64 - 40.0) / 24.0).powi(2) } else { 0.0 };
+                let bump = if u > 40 {
+                    0.05 * ((u as f64 - 40.0) / 24.0).powi(2)
+                } else {
+                    0.0
+                };
                 depth.data[v * 65 + u] = (1.0 + bump) as f32;
             }
         }

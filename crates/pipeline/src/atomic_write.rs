@@ -6,12 +6,18 @@ use crate::PipelineError;
 
 /// Calls `write` on a temporary sibling of `path` (`<name>.tmp`) and renames it to `path` once
 /// `write` succeeded; on failure the temporary file is removed.
-pub fn write_atomically<E>(path: &Path, write: impl FnOnce(&Path) -> Result<(), E>) -> Result<(), PipelineError>
+pub fn write_atomically<E>(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), E>,
+) -> Result<(), PipelineError>
 where
     PipelineError: From<E>,
 {
     let mut tmp: PathBuf = path.to_owned();
-    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+    let mut name = path
+        .file_name()
+        .map(|n| n.to_os_string())
+        .unwrap_or_default();
     name.push(".tmp");
     tmp.set_file_name(name);
     if let Err(e) = write(&tmp) {

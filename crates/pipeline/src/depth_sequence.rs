@@ -66,7 +66,9 @@ impl DepthSequence {
         }
         frames.sort();
         if frames.is_empty() {
-            return Err(PipelineError::NoFrames { dir: dir.to_owned() });
+            return Err(PipelineError::NoFrames {
+                dir: dir.to_owned(),
+            });
         }
         Ok(DepthSequence {
             dir: dir.to_owned(),
@@ -92,7 +94,11 @@ impl DepthSequence {
         let mut sum = vec![0.0f64; pixels];
         let mut empty_frames = Vec::new();
         for index in 0..self.frames.len() {
-            let frame = if index == 0 { first.clone() } else { self.read(index)? };
+            let frame = if index == 0 {
+                first.clone()
+            } else {
+                self.read(index)?
+            };
             if (frame.width, frame.height) != (width, height) {
                 return Err(PipelineError::FrameSize {
                     path: self.frames[index].clone(),
@@ -115,7 +121,9 @@ impl DepthSequence {
             }
         }
         if empty_frames.len() == self.frames.len() {
-            return Err(PipelineError::NoValidDepth { dir: self.dir.clone() });
+            return Err(PipelineError::NoValidDepth {
+                dir: self.dir.clone(),
+            });
         }
         let needed = (DOMAIN_MAJORITY * (self.frames.len() - empty_frames.len()) as f64).max(1.0);
         let domain = Mask {

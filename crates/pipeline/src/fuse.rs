@@ -7,11 +7,15 @@ use std::time::Instant;
 use faer::{Mat, MatRef};
 use serde::Serialize;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
-use visage_fem::{solve_clip, ClipOptions, FusionSystem, StreamingSolver, SurfaceMetrics, SurfaceQuality, Weights};
+use visage_fem::{
+    solve_clip, ClipOptions, FusionSystem, StreamingSolver, SurfaceMetrics, SurfaceQuality, Weights,
+};
 use visage_mesh::io::write_ply;
 use visage_mesh::TriMesh;
 
-use crate::report::{FrameMetrics, FrameStatus, FuseReport, FuseSummary, MeshSummary, SolverSummary};
+use crate::report::{
+    FrameMetrics, FrameStatus, FuseReport, FuseSummary, MeshSummary, SolverSummary,
+};
 use crate::{write_atomically, DepthSequence, FusionSetup, MeshingOptions, PipelineError};
 
 /// Depth values beyond this (metres) count as invalid by default (sensor saturation, far
@@ -166,10 +170,12 @@ impl Fuser {
                 self.raw[(i, c)] = self.fill[(i, c)];
             }
         }
-        let valid = self
-            .setup
-            .quadrature
-            .assemble_rhs(depth, self.max_depth, self.fill.as_ref(), self.b.as_mut());
+        let valid = self.setup.quadrature.assemble_rhs(
+            depth,
+            self.max_depth,
+            self.fill.as_ref(),
+            self.b.as_mut(),
+        );
         result.valid_fraction = valid as f64 / pixels as f64;
         result.rhs_seconds = start.elapsed().as_secs_f64();
         if valid == 0 {
@@ -207,7 +213,9 @@ fn mean_valid_distance(depth: &DepthMap, k: &Intrinsics, max_depth: f64) -> Opti
         for u in 0..depth.width {
             let d = depth.at(u, v);
             if DepthMap::is_valid(d) && d as f64 <= max_depth {
-                sum += depth.kind.to_ray_distance(d as f64, k.ray(u as f64, v as f64));
+                sum += depth
+                    .kind
+                    .to_ray_distance(d as f64, k.ray(u as f64, v as f64));
                 count += 1;
             }
         }
@@ -238,7 +246,7 @@ pub fn fuse_sequence(
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<FuseReport, PipelineError> {
     weights.validate()?;
-    if !(options.max_depth_m > 0.0) {
+    if options.max_depth_m.is_nan() || options.max_depth_m <= 0.0 {
         return Err(PipelineError::InvalidOption {
             name: "max-depth",
             value: options.max_depth_m.to_string(),
@@ -289,13 +297,23 @@ pub fn fuse_sequence(
         summary: FuseSummary::of(&[]),
     };
     let mut writer = MeshWriter {
-        mesh: TriMesh::new(vec![[0.0; 3]; setup.vertex_count()], setup.mesh.triangles.clone()),
+        mesh: TriMesh::new(
+            vec![[0.0; 3]; setup.vertex_count()],
+            setup.mesh.triangles.clone(),
+        ),
         meshes_dir,
         raw_dir: options.save_raw.then_some(raw_dir),
     };
     let outcome = match options.mode {
         Mode::Streaming => run_streaming(sequence, &mut fuser, &mut writer, &mut report, progress),
-        Mode::Clip => run_clip(sequence, &mut fuser, &mut writer, &mut report, &options.clip, progress),
+        Mode::Clip => run_clip(
+            sequence,
+            &mut fuser,
+            &mut writer,
+            &mut report,
+            &options.clip,
+            progress,
+        ),
     };
     report.summary = FuseSummary::of(&report.frames);
     if let Err(e) = &outcome {
@@ -331,7 +349,12 @@ struct MeshWriter {
 }
 
 impl MeshWriter {
-    fn write(&mut self, index: usize, solution: MatRef<'_, f64>, raw: MatRef<'_, f64>) -> Result<(), PipelineError> {
+    fn write(
+        &mut self,
+        index: usize,
+        solution: MatRef<'_, f64>,
+        raw: MatRef<'_, f64>,
+    ) -> Result<(), PipelineError> {
         let name = format!("{index:06}.ply");
         to_positions(solution, &mut self.mesh.vertices);
         write_atomically(&self.meshes_dir.join(&name), |p| write_ply(p, &self.mesh))?;
@@ -343,7 +366,13 @@ impl MeshWriter {
     }
 }
 
-fn frame_metrics(index: usize, source: &Path, r: &FrameResult, raw: SurfaceQuality, fused: SurfaceQuality) -> FrameMetrics {
+fn frame_metrics(
+    index: usize,
+    source: &Path,
+    r: &FrameResult,
+    raw: SurfaceQuality,
+    fused: SurfaceQuality,
+) -> FrameMetrics {
     FrameMetrics {
         index,
         source: source.display().to_string(),
@@ -367,8 +396,12 @@ fn frame_metrics(index: usize, source: &Path, r: &FrameResult, raw: SurfaceQuali
 fn warn_status(sequence: &DepthSequence, index: usize, status: FrameStatus) {
     let path = sequence.frames[index].display();
     match status {
-        FrameStatus::Carried => eprintln!("warning: {path}: no valid depth; previous frame's surface carried over"),
-        FrameStatus::NoData => eprintln!("warning: {path}: no valid depth and no previous frame; no mesh written"),
+        FrameStatus::Carried => {
+            eprintln!("warning: {path}: no valid depth; previous frame's surface carried over")
+        }
+        FrameStatus::NoData => {
+            eprintln!("warning: {path}: no valid depth and no previous frame; no mesh written")
+        }
         FrameStatus::Solved => {}
     }
 }
@@ -391,7 +424,13 @@ fn run_streaming(
             writer.write(index, fuser.solution(), fuser.raw())?;
             fuser.frame_quality()
         };
-        report.frames.push(frame_metrics(index, &sequence.frames[index], &r, raw_q, fused_q));
+        report.frames.push(frame_metrics(
+            index,
+            &sequence.frames[index],
+            &r,
+            raw_q,
+            fused_q,
+        ));
         progress(index + 1, total);
     }
     Ok(())
@@ -442,7 +481,13 @@ fn run_clip(
             r.relative_residual = clip_report.relative_residual;
             (fuser.quality(raw.as_ref()), fuser.quality(x.as_ref()))
         };
-        report.frames.push(frame_metrics(index, &sequence.frames[index], &r, raw_q, fused_q));
+        report.frames.push(frame_metrics(
+            index,
+            &sequence.frames[index],
+            &r,
+            raw_q,
+            fused_q,
+        ));
         progress(total + index + 1, 2 * total);
     }
     Ok(())

@@ -3,8 +3,12 @@
 use faer::Mat;
 use visage_camera::{DepthMap, Intrinsics};
 use visage_fem::domain::domain_coordinates;
-use visage_fem::{biharmonic, cotan_laplacian, lumped_mass, mass_matrix, Operators, PixelQuadrature};
-use visage_mesh::{flip_depth_aware, sample_domain, Mask, OneRing, PlanarMesh, SamplingOptions, TriangulationKind};
+use visage_fem::{
+    biharmonic, cotan_laplacian, lumped_mass, mass_matrix, Operators, PixelQuadrature,
+};
+use visage_mesh::{
+    flip_depth_aware, sample_domain, Mask, OneRing, PlanarMesh, SamplingOptions, TriangulationKind,
+};
 
 use crate::PipelineError;
 
@@ -52,7 +56,12 @@ impl FusionSetup {
     /// Meshes `domain` (pixels to cover) using `reference` (a depth map of the sequence, e.g.
     /// its per-pixel mean) for refinement, the flatness ratio and depth-aware flips, and
     /// assembles M, M_D and K.
-    pub fn new(k: &Intrinsics, domain: &Mask, reference: &DepthMap, options: &MeshingOptions) -> Result<Self, PipelineError> {
+    pub fn new(
+        k: &Intrinsics,
+        domain: &Mask,
+        reference: &DepthMap,
+        options: &MeshingOptions,
+    ) -> Result<Self, PipelineError> {
         k.check_size(domain.width, domain.height)?;
         let sampling = SamplingOptions {
             spacing: options.spacing,
@@ -98,7 +107,13 @@ impl FusionSetup {
     /// Samples `depth` at every vertex: `raw[i] = D(x_i) ρ(x_i)` (bilinear over valid
     /// neighbours, values beyond `max_depth` ignored) and `valid[i]` whether that was possible.
     /// Returns the number of valid vertices. Allocates nothing.
-    pub fn sample_vertices(&self, depth: &DepthMap, max_depth: f64, raw: &mut Mat<f64>, valid: &mut [bool]) -> usize {
+    pub fn sample_vertices(
+        &self,
+        depth: &DepthMap,
+        max_depth: f64,
+        raw: &mut Mat<f64>,
+        valid: &mut [bool],
+    ) -> usize {
         let mut count = 0;
         for (i, p) in self.mesh.points.iter().enumerate() {
             let d = depth

@@ -12,6 +12,8 @@ mod report;
 pub use atomic_write::write_atomically;
 pub use depth_sequence::{DepthSequence, SequenceSurvey, DOMAIN_MAJORITY};
 pub use error::PipelineError;
-pub use fuse::{fuse_sequence, to_positions, FrameResult, FuseOptions, Fuser, Mode, DEFAULT_MAX_DEPTH_M};
+pub use fuse::{
+    fuse_sequence, to_positions, FrameResult, FuseOptions, Fuser, Mode, DEFAULT_MAX_DEPTH_M,
+};
 pub use fusion_setup::{FusionSetup, MeshingOptions};
 pub use report::{FrameMetrics, FrameStatus, FuseReport, FuseSummary, MeshSummary, SolverSummary};

@@ -103,7 +103,10 @@ pub struct FuseReport {
 impl FuseSummary {
     /// Totals of `frames`.
     pub fn of(frames: &[FrameMetrics]) -> Self {
-        let solved: Vec<&FrameMetrics> = frames.iter().filter(|f| f.status == FrameStatus::Solved).collect();
+        let solved: Vec<&FrameMetrics> = frames
+            .iter()
+            .filter(|f| f.status == FrameStatus::Solved)
+            .collect();
         let count = |s| frames.iter().filter(|f| f.status == s).count();
         let mean = |f: &dyn Fn(&FrameMetrics) -> f64| {
             if solved.is_empty() {
@@ -120,7 +123,10 @@ impl FuseSummary {
             carried: count(FrameStatus::Carried),
             no_data: count(FrameStatus::NoData),
             median_solve_ms: times.get(times.len() / 2).copied().unwrap_or(0.0),
-            max_relative_residual: solved.iter().map(|f| f.relative_residual).fold(0.0, f64::max),
+            max_relative_residual: solved
+                .iter()
+                .map(|f| f.relative_residual)
+                .fold(0.0, f64::max),
             mean_curvature_improvement: mean(&|f| f.curvature_improvement),
             mean_roughness_raw: mean(&|f| f.roughness_raw),
             mean_roughness: mean(&|f| f.roughness),

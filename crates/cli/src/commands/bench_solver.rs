@@ -8,7 +8,7 @@ use clap::Args;
 use faer::Mat;
 use serde::Serialize;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
-use visage_fem::{Factorization, FusionSystem, StreamingSolver, Weights};
+use visage_fem::{FactorVariant, Factorization, FusionSystem, StreamingSolver, Weights};
 use visage_mesh::{Mask, TriangulationKind};
 use visage_pipeline::{FusionSetup, MeshingOptions};
 
@@ -46,6 +46,15 @@ struct SizeReport {
     solve3_ms_median: f64,
     /// Three single-column solves: median of their sum.
     solve1x3_ms_median: f64,
+    /// The same factorisation forced to each kernel: factor time and 3-column solve median.
+    variants: Vec<VariantReport>,
+}
+
+#[derive(Serialize)]
+struct VariantReport {
+    variant: FactorVariant,
+    factor_ms: f64,
+    solve3_ms_median: f64,
 }
 
 #[derive(Serialize)]
@@ -86,7 +95,8 @@ pub fn run(args: BenchSolverArgs) -> anyhow::Result<()> {
         for v in 0..h {
             for u in 0..w {
                 let (x, y) = (u as f64 / w as f64, v as f64 / h as f64);
-                depth.data[(v * w + u) as usize] = (0.6 + 0.05 * (6.0 * x).sin() * (5.0 * y).cos()) as f32;
+                depth.data[(v * w + u) as usize] =
+                    (0.6 + 0.05 * (6.0 * x).sin() * (5.0 * y).cos()) as f32;
             }
         }
         let setup_start = Instant::now();
@@ -95,7 +105,8 @@ pub fn run(args: BenchSolverArgs) -> anyhow::Result<()> {
             triangulation: TriangulationKind::Planar,
             refine_tolerance_m: None,
         };
-        let setup = FusionSetup::new(&k, &Mask::filled(w, h, true), &depth, &options).context("meshing")?;
+        let setup =
+            FusionSetup::new(&k, &Mask::filled(w, h, true), &depth, &options).context("meshing")?;
         let setup_ms = setup_start.elapsed().as_secs_f64() * 1e3;
         let system = FusionSystem::new(setup.ops.clone(), weights)?;
         let a = system.matrix_temporal().clone();
@@ -106,7 +117,9 @@ pub fn run(args: BenchSolverArgs) -> anyhow::Result<()> {
         let mut solver = StreamingSolver::new(system);
         let mut b = Mat::<f64>::zeros(nv, 3);
         let fill = Mat::<f64>::zeros(nv, 3);
-        setup.quadrature.assemble_rhs(&depth, f64::INFINITY, fill.as_ref(), b.as_mut());
+        setup
+            .quadrature
+            .assemble_rhs(&depth, f64::INFINITY, fill.as_ref(), b.as_mut());
         let mut x = Mat::<f64>::zeros(nv, 3);
         solver.step(b.as_ref(), x.as_mut()); // first frame: reset matrix; later: streaming
         let (mut step, mut solve3, mut solve1) = (Vec::new(), Vec::new(), Vec::new());
@@ -123,6 +136,23 @@ pub fn run(args: BenchSolverArgs) -> anyhow::Result<()> {
                 }
             }));
         }
+        let mut variants = Vec::new();
+        for variant in [FactorVariant::Simplicial, FactorVariant::Supernodal] {
+            let mut f = None;
+            let factor_ms = time_ms(|| f = Some(Factorization::with_variant(&a, variant)));
+            let mut f = f.context("unreachable")??;
+            let mut times: Vec<f64> = (0..args.repeats)
+                .map(|_| {
+                    let mut y = b.clone();
+                    time_ms(|| f.solve_in_place(y.as_mut()))
+                })
+                .collect();
+            variants.push(VariantReport {
+                variant,
+                factor_ms,
+                solve3_ms_median: quantile(&mut times, 0.5),
+            });
+        }
         sizes.push(SizeReport {
             vertices: nv,
             image: [w, h],
@@ -134,6 +164,7 @@ pub fn run(args: BenchSolverArgs) -> anyhow::Result<()> {
             step_ms_p95: quantile(&mut step, 0.95),
             solve3_ms_median: quantile(&mut solve3, 0.5),
             solve1x3_ms_median: quantile(&mut solve1, 0.5),
+            variants,
         });
     }
     let report = BenchReport {

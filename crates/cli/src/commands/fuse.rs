@@ -8,7 +8,9 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use visage_camera::{DepthKind, Intrinsics, DEFAULT_FOV_DEG};
 use visage_fem::{ClipOptions, Weights};
 use visage_mesh::TriangulationKind;
-use visage_pipeline::{fuse_sequence, DepthSequence, FuseOptions, MeshingOptions, Mode, DEFAULT_MAX_DEPTH_M};
+use visage_pipeline::{
+    fuse_sequence, DepthSequence, FuseOptions, MeshingOptions, Mode, DEFAULT_MAX_DEPTH_M,
+};
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum ModeArg {
@@ -100,7 +102,10 @@ pub fn run(args: FuseArgs) -> anyhow::Result<()> {
         anyhow::bail!("invalid --refine-mm {}: must be ≥ 0", args.refine_mm);
     }
     if !(args.clip_tolerance.is_finite() && args.clip_tolerance > 0.0) {
-        anyhow::bail!("invalid --clip-tolerance {}: must be > 0", args.clip_tolerance);
+        anyhow::bail!(
+            "invalid --clip-tolerance {}: must be > 0",
+            args.clip_tolerance
+        );
     }
     let sequence = DepthSequence::open(&args.depth, args.depth_scale, kind)?;
     let k = match &args.intrinsics {
@@ -136,23 +141,38 @@ pub fn run(args: FuseArgs) -> anyhow::Result<()> {
     let bar = if args.quiet {
         ProgressBar::hidden()
     } else {
-        let bar = ProgressBar::with_draw_target(Some(sequence.frames.len() as u64), ProgressDrawTarget::stderr());
-        if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  eta {eta}") {
+        let bar = ProgressBar::with_draw_target(
+            Some(sequence.frames.len() as u64),
+            ProgressDrawTarget::stderr(),
+        );
+        if let Ok(style) =
+            ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  eta {eta}")
+        {
             bar.set_style(style);
         }
         bar
     };
     let context = || {
-        let intrinsics = args
-            .intrinsics
-            .as_ref()
-            .map_or_else(|| format!("--fov-deg {}", args.fov_deg), |p| p.display().to_string());
-        format!("fusing {} with intrinsics {intrinsics}", args.depth.display())
+        let intrinsics = args.intrinsics.as_ref().map_or_else(
+            || format!("--fov-deg {}", args.fov_deg),
+            |p| p.display().to_string(),
+        );
+        format!(
+            "fusing {} with intrinsics {intrinsics}",
+            args.depth.display()
+        )
     };
-    let report = fuse_sequence(&sequence, &k, weights, &options, &args.out, &mut |done, total| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    })
+    let report = fuse_sequence(
+        &sequence,
+        &k,
+        weights,
+        &options,
+        &args.out,
+        &mut |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
+    )
     .with_context(context)?;
     bar.finish_and_clear();
     if !args.quiet {

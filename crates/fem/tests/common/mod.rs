@@ -5,7 +5,10 @@
 use faer::Mat;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_fem::domain::domain_coordinates;
-use visage_fem::{biharmonic, cotan_laplacian, lumped_mass, mass_matrix, FusionSystem, Operators, PixelQuadrature, Weights};
+use visage_fem::{
+    biharmonic, cotan_laplacian, lumped_mass, mass_matrix, FusionSystem, Operators,
+    PixelQuadrature, Weights,
+};
 use visage_mesh::{sample_domain, Mask, PlanarMesh, SamplingOptions};
 
 pub struct Setup {
@@ -37,7 +40,12 @@ pub fn setup(width: u32, height: u32, spacing: u32) -> Setup {
         data_mass: quadrature.mass_matrix().unwrap(),
         biharmonic: biharmonic(&l, &ml).unwrap(),
     };
-    Setup { k, mesh, quadrature, ops }
+    Setup {
+        k,
+        mesh,
+        quadrature,
+        ops,
+    }
 }
 
 impl Setup {
@@ -50,7 +58,10 @@ impl Setup {
         let mut d = DepthMap::empty(self.k.width, self.k.height, DepthKind::Z);
         for v in 0..self.k.height {
             for u in 0..self.k.width {
-                let (xn, yn) = ((u as f64 - self.k.cx) / self.k.fx, (v as f64 - self.k.cy) / self.k.fy);
+                let (xn, yn) = (
+                    (u as f64 - self.k.cx) / self.k.fx,
+                    (v as f64 - self.k.cy) / self.k.fy,
+                );
                 d.data[(v * self.k.width + u) as usize] = z(xn, yn) as f32;
             }
         }
@@ -62,7 +73,10 @@ impl Setup {
         let n = self.mesh.points.len();
         Mat::from_fn(n, 3, |i, c| {
             let p = self.mesh.points[i];
-            let (xn, yn) = ((p[0] - self.k.cx) / self.k.fx, (p[1] - self.k.cy) / self.k.fy);
+            let (xn, yn) = (
+                (p[0] - self.k.cx) / self.k.fx,
+                (p[1] - self.k.cy) / self.k.fy,
+            );
             let zz = z(xn, yn);
             [xn * zz, yn * zz, zz][c]
         })
@@ -72,7 +86,8 @@ impl Setup {
         let n = self.mesh.points.len();
         let mut b = Mat::zeros(n, 3);
         let fill = Mat::zeros(n, 3);
-        self.quadrature.assemble_rhs(depth, f64::INFINITY, fill.as_ref(), b.as_mut());
+        self.quadrature
+            .assemble_rhs(depth, f64::INFINITY, fill.as_ref(), b.as_mut());
         b
     }
 }
