@@ -1,0 +1,49 @@
+//! Errors of the morphable-model importer.
+
+use std::path::PathBuf;
+
+/// What can go wrong when importing a morphable model. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum MorphableError {
+    /// A file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A required file of the model folder is absent.
+    #[error("{path}: missing ({what})")]
+    MissingFile { path: PathBuf, what: &'static str },
+    /// A malformed line of an OBJ file (1-based line number).
+    #[error("{path}:{line}: {reason}")]
+    Syntax {
+        path: PathBuf,
+        line: usize,
+        reason: String,
+    },
+    /// A mode's mesh does not have the neutral mesh's vertex count.
+    #[error("{path}: {got} vertices, the neutral mesh has {expected}")]
+    VertexCount {
+        path: PathBuf,
+        expected: usize,
+        got: usize,
+    },
+    /// `vertex_indices.json` is malformed or inconsistent with the mesh.
+    #[error("{path}: {reason}")]
+    Indices { path: PathBuf, reason: String },
+    /// A requested expression is not part of the model folder.
+    #[error("{dir}: no expression named {name:?} (available: {available})")]
+    UnknownExpression {
+        dir: PathBuf,
+        name: String,
+        available: String,
+    },
+    /// Weights given to [`crate::IctModel::shape`] do not match the model's modes.
+    #[error("{what}: {got} weights for {expected} modes")]
+    WeightCount {
+        what: &'static str,
+        expected: usize,
+        got: usize,
+    },
+}

@@ -1,0 +1,25 @@
+//! Morphable face models (paper §3): the importer of the ICT-FaceKit model (ICT-VGL/ICT-FaceKit,
+//! MIT licence), shared by the ground-truth benchmark (`visage-eval`) and the 3-DMM fitter.
+//!
+//! A model is a neutral mesh S̄ plus linear modes: `S(p, e) = S̄ + Σ_i p_i U_i + Σ_j e_j B_j`,
+//! with identity modes `U_i = identity_i − S̄` (weights drawn from N(0, 1)) and expression
+//! blendshape modes `B_j = expression_j − S̄` (weights in [0, 1]).
+//!
+//! # Conventions
+//! - **Units**: metres (the OBJ files are in centimetres; [`CM_TO_M`] is applied on import).
+//! - **Model frame**: the ICT frame — x to the subject's left as seen from the front (image
+//!   right), y up, the face looking along +z.
+//! - **Vertex numbering**: vertex `i` is the `i`-th `v` line of the OBJ files (no UV-seam
+//!   copies), so landmark indices and region ranges index positions directly.
+//! - **Triangles**: every polygon `(v0, …, vn)` becomes the fan `(v0, vi, vi+1)`; quads give
+//!   two triangles with the file's orientation.
+
+mod error;
+mod ict_model;
+mod obj_positions;
+mod regions;
+
+pub use error::MorphableError;
+pub use ict_model::{IctModel, ImportOptions, LANDMARK_COUNT};
+pub use obj_positions::{read_obj_positions, ObjPositions};
+pub use regions::{Region, CM_TO_M, SOLID_SURFACE_END};
