@@ -9,6 +9,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::linalg::SupernodalThreshold;
 use std::sync::Arc;
 
+use faer::perm::PermRef;
 use faer::{Conj, MatMut, Par, Side};
 
 use crate::sparse::SparseMatrix;
@@ -60,8 +61,47 @@ impl Factorization {
         Self::with_variant(a, FactorVariant::Auto)
     }
 
-    /// Factors `a` with the given kernel.
+    /// Factors `a` with the given kernel and AMD ordering.
     pub fn with_variant(a: &SparseMatrix, variant: FactorVariant) -> Result<Self, FemError> {
+        Self::with_options(a, variant, None)
+    }
+
+    /// Factors `a` with the given kernel and fill-reducing order: `order[k]` is the unknown
+    /// eliminated k-th (e.g. from [`crate::nested_dissection`]); `None` selects AMD.
+    pub fn with_options(
+        a: &SparseMatrix,
+        variant: FactorVariant,
+        order: Option<&[usize]>,
+    ) -> Result<Self, FemError> {
+        let n = a.nrows();
+        let inverse: Option<Vec<usize>> = match order {
+            Some(order) => {
+                let mut inv = vec![usize::MAX; n];
+                if order.len() != n {
+                    return Err(FemError::Dimension {
+                        what: "elimination order length",
+                        expected: n,
+                        got: order.len(),
+                    });
+                }
+                for (k, &i) in order.iter().enumerate() {
+                    if i >= n || inv[i] != usize::MAX {
+                        return Err(FemError::Assembly {
+                            reason: format!(
+                                "elimination order is not a permutation (entry {k} = {i})"
+                            ),
+                        });
+                    }
+                    inv[i] = k;
+                }
+                Some(inv)
+            }
+            None => None,
+        };
+        let ordering = match (order, &inverse) {
+            (Some(fwd), Some(inv)) => SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, n)),
+            _ => SymmetricOrdering::Amd,
+        };
         let threshold = match variant {
             FactorVariant::Auto => SupernodalThreshold::AUTO,
             FactorVariant::Simplicial => SupernodalThreshold::FORCE_SIMPLICIAL,
@@ -70,7 +110,7 @@ impl Factorization {
         let symbolic = factorize_symbolic_cholesky(
             a.symbolic(),
             Side::Lower,
-            SymmetricOrdering::Amd,
+            ordering,
             CholeskySymbolicParams {
                 supernodal_flop_ratio_threshold: threshold,
                 ..Default::default()

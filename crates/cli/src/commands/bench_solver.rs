@@ -8,7 +8,10 @@ use clap::Args;
 use faer::Mat;
 use serde::Serialize;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
-use visage_fem::{FactorVariant, Factorization, FusionSystem, StreamingSolver, Weights};
+use visage_fem::domain::domain_coordinates;
+use visage_fem::{
+    nested_dissection, FactorVariant, Factorization, FusionSystem, StreamingSolver, Weights,
+};
 use visage_mesh::{Mask, TriangulationKind};
 use visage_pipeline::{FusionSetup, MeshingOptions};
 
@@ -53,6 +56,8 @@ struct SizeReport {
 #[derive(Serialize)]
 struct VariantReport {
     variant: FactorVariant,
+    ordering: &'static str,
+    factor_nnz: usize,
     factor_ms: f64,
     solve3_ms_median: f64,
 }
@@ -137,9 +142,18 @@ pub fn run(args: BenchSolverArgs) -> anyhow::Result<()> {
             }));
         }
         let mut variants = Vec::new();
-        for variant in [FactorVariant::Simplicial, FactorVariant::Supernodal] {
+        let xi = domain_coordinates(&setup.mesh.points, &k);
+        let mut nd = Vec::new();
+        let nd_ms = time_ms(|| nd = nested_dissection(&xi, &a));
+        let orders: [(&'static str, Option<&[usize]>); 2] =
+            [("amd", None), ("nested-dissection", Some(&nd))];
+        for (variant, (ordering, order)) in [FactorVariant::Simplicial, FactorVariant::Supernodal]
+            .into_iter()
+            .flat_map(|v| orders.iter().map(move |o| (v, *o)))
+        {
             let mut f = None;
-            let factor_ms = time_ms(|| f = Some(Factorization::with_variant(&a, variant)));
+            let factor_ms = time_ms(|| f = Some(Factorization::with_options(&a, variant, order)))
+                + if order.is_some() { nd_ms } else { 0.0 };
             let mut f = f.context("unreachable")??;
             let mut times: Vec<f64> = (0..args.repeats)
                 .map(|_| {
@@ -149,6 +163,8 @@ pub fn run(args: BenchSolverArgs) -> anyhow::Result<()> {
                 .collect();
             variants.push(VariantReport {
                 variant,
+                ordering,
+                factor_nnz: f.factor_nnz(),
                 factor_ms,
                 solve3_ms_median: quantile(&mut times, 0.5),
             });
