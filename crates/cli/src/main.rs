@@ -30,6 +30,10 @@ enum Command {
     BenchSolver(commands::bench_solver::BenchSolverArgs),
     /// Render a mesh to a colour PNG and/or a 16-bit depth PNG (paper §6).
     Render(commands::render::RenderArgs),
+    /// 468 FaceMesh landmarks, metric head pose and face depth maps from images or video (paper §3).
+    Landmarks(commands::landmarks::LandmarksArgs),
+    /// Fetch or check the pinned MediaPipe model files (Apache-2.0, from npm).
+    Models(commands::models::ModelsArgs),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +42,8 @@ fn main() -> ExitCode {
         Command::Fuse(args) => commands::fuse::run(args),
         Command::BenchSolver(args) => commands::bench_solver::run(args),
         Command::Render(args) => commands::render::run(args),
+        Command::Landmarks(args) => commands::landmarks::run(args),
+        Command::Models(args) => commands::models::run(args),
     };
     exit::report(result)
 }

@@ -2,4 +2,6 @@
 
 pub mod bench_solver;
 pub mod fuse;
+pub mod landmarks;
+pub mod models;
 pub mod render;

@@ -1,0 +1,167 @@
+//! `visage landmarks`: 468 FaceMesh landmarks per face and frame (paper §3), optionally the
+//! metric face pose and dense depth maps that `visage fuse --depth` reads.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
+use clap::Args;
+use serde_json::{json, Value};
+use visage_camera::{write_depth_png, DepthKind, Intrinsics, DEFAULT_FOV_DEG};
+use visage_face::{
+    fit_face_geometry, model_files, render_faces_depth, CanonicalMesh, Face, FaceGeometry,
+    FaceMesh, FaceTracker,
+};
+use visage_video::{is_image_path, FrameSource};
+
+/// Arguments of `visage landmarks`.
+#[derive(Args, Debug)]
+pub struct LandmarksArgs {
+    /// Images, videos or folders of images. A single image reports every face; a video or a
+    /// folder is a sequence: one face is tracked (the detector runs only when it is lost).
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+    /// Write the JSON here instead of standard output.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Also write, per frame, a 16-bit PNG z-depth map in millimetres (0 = no face) of the
+    /// fitted metric face mesh into this folder (`visage fuse --depth DIR` reads it).
+    #[arg(long)]
+    depth_out: Option<PathBuf>,
+    /// Camera intrinsics JSON ({"width","height","fx","fy","cx","cy"}); default: --fov-deg.
+    #[arg(long, conflicts_with = "fov_deg")]
+    intrinsics: Option<PathBuf>,
+    /// Horizontal field of view (degrees) when no intrinsics file is given.
+    #[arg(long)]
+    fov_deg: Option<f64>,
+    /// Model directory; default: $VISAGE_MODELS, else ./models (see `visage models fetch`).
+    #[arg(long)]
+    models: Option<PathBuf>,
+}
+
+/// Runs `visage landmarks`.
+pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
+    let fov = args.fov_deg.unwrap_or(DEFAULT_FOV_DEG);
+    if !(fov.is_finite() && fov > 0.0 && fov < 180.0) {
+        bail!("--fov-deg {fov}: must lie strictly between 0 and 180");
+    }
+    let intrinsics = args
+        .intrinsics
+        .as_deref()
+        .map(Intrinsics::load_json)
+        .transpose()
+        .context("cannot use --intrinsics")?;
+    let models = args.models.clone().unwrap_or_else(model_files::models_dir);
+    let mesh = FaceMesh::load(&models)?;
+    let canonical = CanonicalMesh::load(&models)?;
+    if let Some(dir) = &args.depth_out {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    let mut frames_json = Vec::new();
+    let mut frame_counter = 0usize;
+    let mut tracker = FaceTracker::new(mesh);
+    for input in &args.inputs {
+        let still = input.is_file() && is_image_path(input);
+        tracker.reset();
+        let source = FrameSource::open(input)?;
+        for frame in source {
+            let frame = frame?;
+            let (w, h) = frame.image.dimensions();
+            let k = match intrinsics {
+                Some(k) => {
+                    k.check_size(w, h)
+                        .with_context(|| format!("{}: --intrinsics", frame.source))?;
+                    k
+                }
+                None => Intrinsics::from_fov(w, h, fov)?,
+            };
+            let faces: Vec<Face> = if still {
+                tracker.mesh.process(&frame.image)?
+            } else {
+                tracker.track(&frame.image)?.face.into_iter().collect()
+            };
+            if faces.is_empty() {
+                eprintln!("warning: {}: no face found", frame.source);
+            }
+            let mut faces_json = Vec::new();
+            let mut geometries = Vec::new();
+            for face in &faces {
+                let mut fj = face_json(face);
+                match fit_face_geometry(&canonical, &face.landmarks.points, &k) {
+                    Ok(g) => {
+                        fj["pose"] = pose_json(&g);
+                        geometries.push(g);
+                    }
+                    Err(e) => eprintln!("warning: {}: no metric fit: {e}", frame.source),
+                }
+                faces_json.push(fj);
+            }
+            if let Some(dir) = &args.depth_out {
+                let depth = render_faces_depth(&geometries, &canonical, &k, DepthKind::Z)?;
+                let path = dir.join(format!("depth_{frame_counter:06}.png"));
+                write_depth_png(&path, &depth, 1000.0)
+                    .with_context(|| format!("cannot write {}", path.display()))?;
+            }
+            frames_json.push(json!({
+                "source": frame.source,
+                "index": frame.index,
+                "width": w,
+                "height": h,
+                "faces": faces_json,
+            }));
+            frame_counter += 1;
+        }
+    }
+    if tracker.frames > 0 {
+        eprintln!(
+            "tracked {} video frames, detector ran on {} ({:.1}%)",
+            tracker.frames,
+            tracker.detector_runs,
+            100.0 * tracker.detector_runs as f64 / tracker.frames as f64
+        );
+    }
+    let doc = json!({ "frames": frames_json });
+    write_json(args.out.as_deref(), &doc)
+}
+
+fn face_json(face: &Face) -> Value {
+    let r = |v: f32| (v as f64 * 1000.0).round() / 1000.0;
+    json!({
+        "score": r(face.score),
+        "box": face.bbox.map(r),
+        "presence": r(face.landmarks.presence),
+        "landmarks": face.landmarks.points.iter().map(|p| [r(p[0]), r(p[1]), r(p[2])]).collect::<Vec<_>>(),
+    })
+}
+
+/// Metric head pose: `X_cam = R · X_canonical + t` (camera coordinates, metres), the
+/// canonical face's axes in camera axes, Euler angles and the fit's reprojection error.
+fn pose_json(g: &FaceGeometry) -> Value {
+    let r = &g.pose.rotation;
+    let deg = |v: f64| (v.to_degrees() * 100.0).round() / 100.0;
+    // Z-Y-X (yaw about y, pitch about x, roll about z) of the rotation.
+    let yaw = (-r[2][0]).asin();
+    let pitch = r[2][1].atan2(r[2][2]);
+    let roll = r[1][0].atan2(r[0][0]);
+    json!({
+        "rotation": r,
+        "translation_m": g.pose.translation,
+        "yaw_deg": deg(yaw),
+        "pitch_deg": deg(pitch),
+        "roll_deg": deg(roll),
+        "reprojection_rms_px": (g.rms_px * 1000.0).round() / 1000.0,
+    })
+}
+
+fn write_json(out: Option<&Path>, doc: &Value) -> anyhow::Result<()> {
+    let text = serde_json::to_string(doc)?;
+    match out {
+        Some(path) => {
+            std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+        }
+        None => {
+            let mut stdout = std::io::stdout().lock();
+            writeln!(stdout, "{text}").context("cannot write to standard output")
+        }
+    }
+}
