@@ -111,11 +111,14 @@ impl RenderConfig {
                 .iter_mut()
                 .for_each(|p| *p = p.map(|c| c * args.mesh_scale));
         }
-        let k = Intrinsics::load_json(&args.intrinsics)?;
+        let k = Intrinsics::load_json(&args.intrinsics)
+            .with_context(|| format!("{}", args.intrinsics.display()))?;
         let mut camera =
             Camera::new(k).with_context(|| format!("{}", args.intrinsics.display()))?;
         if let Some(path) = &args.pose {
-            camera = camera.with_pose(Pose::load_json(path)?)?;
+            camera = camera
+                .with_pose(Pose::load_json(path)?)
+                .with_context(|| format!("{}", path.display()))?;
         }
         let texture = match &args.texture {
             Some(path) => {
@@ -268,5 +271,84 @@ mod tests {
             numbered(Path::new("a/c.png"), 0, 1),
             PathBuf::from("a/c.png")
         );
+    }
+
+    fn args(dir: &Path, mesh: &str) -> RenderArgs {
+        RenderArgs {
+            mesh: dir.join(mesh),
+            intrinsics: dir.join("cam.json"),
+            pose: None,
+            texture: None,
+            projective: false,
+            out: Some(dir.join("c.png")),
+            depth_out: Some(dir.join("d.png")),
+            depth_kind: DepthKindArg::Z,
+            views: None,
+            mesh_scale: 1.0,
+            unlit: false,
+            cull_back: false,
+        }
+    }
+
+    #[test]
+    fn renders_depth_that_fuse_reads_and_colours_projectively() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let k = Intrinsics::new(32, 24, 30.0, 30.0, 15.5, 11.5).unwrap();
+        k.save_json(&d.join("cam.json")).unwrap();
+        // A plane at z = 0.8 m filling the view.
+        std::fs::write(
+            d.join("plane.obj"),
+            "v -1 -1 0.8\nv 1 -1 0.8\nv 1 1 0.8\nv -1 1 0.8\nf 1 2 3 4\n",
+        )
+        .unwrap();
+        run(args(d, "plane.obj")).unwrap();
+        let depth =
+            visage_camera::read_depth_png(&d.join("d.png"), DEPTH_PNG_SCALE, DepthKind::Z).unwrap();
+        assert!(
+            depth.data.iter().all(|&z| (z - 0.8).abs() < 1e-6),
+            "800 mm everywhere"
+        );
+        // Projective texturing from the same camera reproduces the texture image.
+        let mut img = image::RgbImage::new(32, 24);
+        for (x, y, p) in img.enumerate_pixels_mut() {
+            *p = image::Rgb([(x * 8) as u8, (y * 10) as u8, 77]);
+        }
+        img.save(d.join("frame.png")).unwrap();
+        let mut a = args(d, "plane.obj");
+        a.texture = Some(d.join("frame.png"));
+        a.projective = true;
+        a.unlit = true;
+        run(a).unwrap();
+        let back = image::open(d.join("c.png")).unwrap().to_rgb8();
+        for (p, q) in back.pixels().zip(img.pixels()) {
+            for c in 0..3 {
+                assert!((p.0[c] as i32 - q.0[c] as i32).abs() <= 1, "{p:?} vs {q:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn bad_inputs_are_errors_that_name_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        Intrinsics::new(8, 8, 8.0, 8.0, 3.5, 3.5)
+            .unwrap()
+            .save_json(&d.join("cam.json"))
+            .unwrap();
+        std::fs::write(d.join("bad.obj"), "v 0 0 1\nv 1 0 1\nv 0 1 1\nf 1 2 7\n").unwrap();
+        let err = format!("{:#}", run(args(d, "bad.obj")).unwrap_err());
+        assert!(err.contains("bad.obj:4"), "{err}");
+        std::fs::write(d.join("empty.obj"), "# no geometry\n").unwrap();
+        let err = format!("{:#}", run(args(d, "empty.obj")).unwrap_err());
+        assert!(err.contains("empty"), "{err}");
+        std::fs::write(d.join("ok.obj"), "v 0 0 1\nv 1 0 1\nv 0 1 1\nf 1 2 3\n").unwrap();
+        std::fs::write(
+            d.join("cam.json"),
+            r#"{"width": 8, "height": 8, "fx": 0, "fy": 8, "cx": 3.5, "cy": 3.5}"#,
+        )
+        .unwrap();
+        let err = format!("{:#}", run(args(d, "ok.obj")).unwrap_err());
+        assert!(err.contains("cam.json") && err.contains("fx"), "{err}");
     }
 }
