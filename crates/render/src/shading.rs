@@ -185,7 +185,12 @@ pub struct BlinnPhong {
     light: Light,
     /// `ν·h` below which the lobe is negligible.
     cos_cutoff: f32,
+    /// `α` when it is a whole number up to [`MAX_INTEGER_SHININESS`] (`powi` is much cheaper).
+    integer_shininess: Option<i32>,
 }
+
+/// Largest shininess evaluated by repeated multiplication.
+const MAX_INTEGER_SHININESS: f32 = 1024.0;
 
 impl BlinnPhong {
     /// Validates `material` and `light` and precomputes the cut-off.
@@ -197,10 +202,14 @@ impl BlinnPhong {
         } else {
             f32::INFINITY
         };
+        let a = material.shininess;
+        let integer_shininess =
+            (a.fract() == 0.0 && a <= MAX_INTEGER_SHININESS).then_some(a as i32);
         Ok(BlinnPhong {
             material,
             light,
             cos_cutoff,
+            integer_shininess,
         })
     }
 
@@ -218,7 +227,11 @@ impl BlinnPhong {
             if h_len > 0.0 {
                 let n_dot_h = (dot(normal, h) / h_len).clamp(0.0, 1.0);
                 if n_dot_h >= self.cos_cutoff {
-                    spec = m.ks * n_dot_h.powf(m.shininess);
+                    spec = m.ks
+                        * match self.integer_shininess {
+                            Some(a) => n_dot_h.powi(a),
+                            None => n_dot_h.powf(m.shininess),
+                        };
                 }
             }
         }
