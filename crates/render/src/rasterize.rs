@@ -341,15 +341,17 @@ fn setup_triangle(
     out: &mut Vec<ScreenTriangle>,
 ) {
     let c = t.map(|i| clip[i as usize]);
-    // Trivial rejection: all corners outside one frustum plane (valid in homogeneous space).
-    let outside = |f: &dyn Fn([f64; 4]) -> f64| c.iter().all(|&v| f(v) < 0.0);
-    if outside(&|v| v[3] - v[0])
-        || outside(&|v| v[3] + v[0])
-        || outside(&|v| v[3] - v[1])
-        || outside(&|v| v[3] + v[1])
-        || outside(&near_distance)
-        || outside(&far_distance)
-    {
+    // Trivial rejection: all corners outside one frustum plane (valid in homogeneous space),
+    // with one outcode bit per plane.
+    let outcode = |v: [f64; 4]| -> u8 {
+        ((v[3] - v[0] < 0.0) as u8)
+            | ((v[3] + v[0] < 0.0) as u8) << 1
+            | ((v[3] - v[1] < 0.0) as u8) << 2
+            | ((v[3] + v[1] < 0.0) as u8) << 3
+            | ((near_distance(v) < 0.0) as u8) << 4
+            | ((far_distance(v) < 0.0) as u8) << 5
+    };
+    if outcode(c[0]) & outcode(c[1]) & outcode(c[2]) != 0 {
         return;
     }
     let corner = |k: usize| {
