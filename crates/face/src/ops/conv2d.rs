@@ -1,3 +1,4 @@
+use super::depthwise_conv2d::valid_taps;
 use super::{Madd, Window};
 
 /// Convolution weights re-laid out for the NHWC kernel: `w[(ky·k_w + kx)·C_in + ci][co]`
@@ -83,19 +84,20 @@ pub fn conv2d<M: Madd>(
         for r in 0..n {
             let (oy, ox) = ((first + r) / win.out_w, (first + r) % win.out_w);
             let dst = &mut patch[r * red..(r + 1) * red];
-            let mut p = 0;
+            // Per kernel row, the valid taps are one contiguous run of the input row.
+            let (kx0, kx1) = valid_taps(ox, win.stride_w, win.pad_left, win.k_w, win.in_w);
             for ky in 0..win.k_h {
-                let iy = Window::tap(oy, win.stride_h, ky, win.pad_top, win.in_h);
-                for kx in 0..win.k_w {
-                    let ix = Window::tap(ox, win.stride_w, kx, win.pad_left, win.in_w);
-                    let d = &mut dst[p..p + ci];
-                    match (iy, ix) {
-                        (Some(iy), Some(ix)) => {
-                            d.copy_from_slice(&x[(iy * win.in_w + ix) * ci..][..ci])
-                        }
-                        _ => d.fill(0.0),
+                let row = &mut dst[ky * win.k_w * ci..(ky + 1) * win.k_w * ci];
+                match Window::tap(oy, win.stride_h, ky, win.pad_top, win.in_h) {
+                    Some(iy) if kx1 > kx0 => {
+                        let ix0 = ox * win.stride_w + kx0 - win.pad_left;
+                        row[..kx0 * ci].fill(0.0);
+                        row[kx0 * ci..kx1 * ci].copy_from_slice(
+                            &x[(iy * win.in_w + ix0) * ci..(iy * win.in_w + ix0 + kx1 - kx0) * ci],
+                        );
+                        row[kx1 * ci..].fill(0.0);
                     }
-                    p += ci;
+                    _ => row.fill(0.0),
                 }
             }
         }
@@ -121,7 +123,7 @@ pub fn conv2d<M: Madd>(
 pub const ROWS: usize = 4;
 
 /// `y[p, :] = b + Σ_r a[p, r] · w[r, :]` for `R` rows: `a` is `R × red`, `w` is `red × C_out`,
-/// `y` is `R × C_out`. Output channels go in register blocks of 16, then 8, then one by one.
+/// `y` is `R × C_out`. Output channels go in register blocks of 16, then 8, then 4, then one by one.
 #[inline(always)]
 fn gemm_rows<M: Madd, const R: usize>(a: &[f32], red: usize, w: &[f32], b: &[f32], y: &mut [f32]) {
     let co = b.len();
@@ -133,6 +135,10 @@ fn gemm_rows<M: Madd, const R: usize>(a: &[f32], red: usize, w: &[f32], b: &[f32
     if ob + 8 <= co {
         block::<M, R, 8>(a, red, w, b, co, ob, y);
         ob += 8;
+    }
+    if ob + 4 <= co {
+        block::<M, R, 4>(a, red, w, b, co, ob, y);
+        ob += 4;
     }
     while ob < co {
         block::<M, R, 1>(a, red, w, b, co, ob, y);

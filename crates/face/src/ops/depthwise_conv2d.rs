@@ -79,7 +79,13 @@ pub fn depthwise_conv2d<M: Madd>(
 
 /// Taps `k0 .. k1` of a window at output index `o` that fall inside `0 .. len`.
 #[inline(always)]
-fn valid_taps(o: usize, stride: usize, pad: usize, k: usize, len: usize) -> (usize, usize) {
+pub(super) fn valid_taps(
+    o: usize,
+    stride: usize,
+    pad: usize,
+    k: usize,
+    len: usize,
+) -> (usize, usize) {
     let start = o * stride;
     let k0 = pad.saturating_sub(start).min(k);
     let k1 = (len + pad).saturating_sub(start).min(k).max(k0);
