@@ -30,6 +30,19 @@
 //! - **Parallelism**: triangle set-up and scan conversion run on rayon's pool; scan conversion
 //!   is split into tiles of [`TILE_ROWS`] image rows, each owning its part of the z-buffer.
 //!
+//! # Decisions where the paper, the ERRATA and issue 4 are silent
+//! - `P` carries `(2cx + 1)/W` instead of ERRATA 12's `2cx/W` because pixel centres sit at
+//!   integers here; with it, the chain of Eq. (6.1) reproduces `Intrinsics::project` exactly.
+//! - Rasterisation is deferred: a visibility buffer (z, set-up id) first, then one exact
+//!   reconstruction and one shading evaluation per visible pixel, so depth is the exact
+//!   ray–triangle intersection and overdraw never shades.
+//! - Texture coordinates are OBJ/OpenGL (`v` up); textures are linear RGBA stored as 16-bit
+//!   values; 8-bit image files are decoded as sRGB. Colour output is linear RGB, written as 8-bit
+//!   sRGB PNG.
+//! - Default near plane 1 mm, far plane 1 km; both sides of triangles drawn and lit (a
+//!   reconstructed face is an open surface); the default light comes from above-left of the
+//!   camera. The specular lobe is skipped where it would add less than 10⁻⁵ (linear).
+//!
 //! # Entry points
 //! - [`render_depth`]: depth + triangle-id + barycentric buffers of a [`visage_mesh::TriMesh`]
 //!   for a camera with intrinsics and optional pose — the ground-truth renderer.
