@@ -204,7 +204,7 @@ impl Renderer {
         // Steps 7–10: one shading evaluation per visible pixel.
         let raster = &self.rasterizer;
         let normals = &self.camera_normals;
-        let positions = raster.camera_positions();
+        let (inv_fx, inv_fy) = (1.0 / k.fx, 1.0 / k.fy);
         let kind = frame.depth.kind;
         let w = k.width as usize;
         // Rows of the optional buffers, or empty rows when a buffer is not wanted.
@@ -227,6 +227,8 @@ impl Renderer {
             .enumerate()
             .for_each(|(y, (((c_row, d_row), t_row), b_row))| {
                 let setups = raster.visibility_row(y);
+                let yr = (y as f64 - k.cy) * inv_fy;
+                let yr2_plus_1 = yr * yr + 1.0;
                 for x in 0..w {
                     let Some(f) = raster.fragment_in_row(setups, x, y) else {
                         c_row[x] = scene.background;
@@ -242,16 +244,12 @@ impl Renderer {
                     // Indices were validated before rasterisation.
                     let t = mesh.triangles[f.triangle as usize].map(|i| i as usize);
                     let b = f.bary;
-                    let (p0, p1, p2) = (positions[t[0]], positions[t[1]], positions[t[2]]);
-                    let p: [f64; 3] =
-                        std::array::from_fn(|j| b[0] * p0[j] + b[1] * p1[j] + b[2] * p2[j]);
-                    let p_len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-                    let inv = -1.0 / p_len;
-                    let view = [
-                        (p[0] * inv) as f32,
-                        (p[1] * inv) as f32,
-                        (p[2] * inv) as f32,
-                    ];
+                    // The surface point is z · (x', y', 1) on this pixel's ray, so the unit view
+                    // vector (surface → eye) and |p|/z come from the ray alone.
+                    let xr = (x as f64 - k.cx) * inv_fx;
+                    let r_len = (xr * xr + yr2_plus_1).sqrt();
+                    let inv = -1.0 / r_len;
+                    let view = [(xr * inv) as f32, (yr * inv) as f32, inv as f32];
                     let (n0, n1, n2) = (normals[t[0]], normals[t[1]], normals[t[2]]);
                     let (b0, b1, b2) = (b[0] as f32, b[1] as f32, b[2] as f32);
                     let mut n: [f32; 3] =
@@ -284,7 +282,7 @@ impl Renderer {
                     c_row[x] = shader.shade(n, view, albedo);
                     let value = match kind {
                         DepthKind::Z => f.z,
-                        DepthKind::Ray => f.z * p_len / p[2],
+                        DepthKind::Ray => f.z * r_len,
                     };
                     d_row[x] = value as f32;
                     if let Some(t) = t_row.get_mut(x) {

@@ -290,3 +290,37 @@ fn shaded_frames_stay_within_unit_radiance_and_bad_scenes_are_rejected() {
         .render(&mesh, &camera, &singular, &Scene::default(), &mut frame)
         .is_err());
 }
+
+#[test]
+fn frame_depth_and_ids_match_the_depth_renderer_in_both_kinds() {
+    let k = Intrinsics::new(64, 48, 55.0, 57.0, 30.2, 25.1).unwrap();
+    let mesh = TriMesh::new(
+        vec![
+            [-0.4, -0.3, 0.9],
+            [0.5, -0.35, 1.3],
+            [0.45, 0.4, 0.7],
+            [-0.5, 0.3, 1.1],
+            [0.0, 0.05, 0.6],
+        ],
+        vec![[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]],
+    );
+    let camera = Camera::new(k).unwrap();
+    for kind in [DepthKind::Z, DepthKind::Ray] {
+        let mut frame = Frame::new(k.width, k.height, kind);
+        Renderer::new()
+            .render(
+                &mesh,
+                &camera,
+                &Mat4::IDENTITY,
+                &Scene::default(),
+                &mut frame,
+            )
+            .unwrap();
+        let reference = visage_render::render_depth(&mesh, &k, None, kind).unwrap();
+        assert_eq!(frame.triangle_id, reference.triangle_id);
+        assert!(reference.depth.valid_count() > 1000);
+        for (a, b) in frame.depth.data.iter().zip(&reference.depth.data) {
+            assert!((a - b).abs() <= 1e-6 * b.abs(), "{kind:?}: {a} vs {b}");
+        }
+    }
+}
