@@ -12,6 +12,9 @@ use visage_mesh::{
 
 use crate::PipelineError;
 
+/// Gauss–Seidel sweeps of the harmonic in-painting of a frame without predecessor.
+pub const INPAINT_SWEEPS: usize = 50;
+
 /// How to mesh the domain (paper §4, ERRATA 9–10).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct MeshingOptions {
@@ -131,8 +134,10 @@ impl FusionSetup {
     }
 
     /// Fills the vertices without data (`valid[i] = false`) of `field` by diffusion from the
-    /// valid ones: repeatedly, each unknown vertex with known neighbours takes the mean ray
-    /// distance of those neighbours; vertices never reached take the mean of all known ones.
+    /// valid ones: a front first gives each unknown vertex the mean ray distance of its known
+    /// neighbours, then [`INPAINT_SWEEPS`] Gauss–Seidel sweeps relax the filled values toward
+    /// the harmonic interpolant (each the mean of its neighbours); vertices never reached take
+    /// the mean of all known ones.
     /// Used for a frame that has no predecessor (first frame, reset). Returns `false` when no
     /// vertex is valid (nothing to fill from).
     pub fn inpaint(&self, field: &mut Mat<f64>, valid: &[bool]) -> bool {
@@ -170,6 +175,15 @@ impl FusionSetup {
             for &(i, d) in &updates {
                 dist[i] = d;
                 known[i] = true;
+            }
+        }
+        for _ in 0..INPAINT_SWEEPS {
+            for i in (0..n).filter(|&i| !valid[i] && known[i]) {
+                let ring = self.ring.of(i);
+                if !ring.is_empty() {
+                    dist[i] =
+                        ring.iter().map(|&j| dist[j as usize]).sum::<f64>() / ring.len() as f64;
+                }
             }
         }
         for i in 0..n {

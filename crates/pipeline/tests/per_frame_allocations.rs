@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_fem::{FusionSystem, Weights};
 use visage_mesh::Mask;
-use visage_pipeline::{FrameStatus, FusionSetup, Fuser, MeshingOptions};
+use visage_pipeline::{FrameStatus, Fuser, FusionSetup, MeshingOptions};
 
 struct Counting;
 
@@ -51,7 +51,13 @@ fn streaming_frames_allocate_nothing() {
     let probe = std::hint::black_box(vec![0u8; 64]);
     assert!(ALLOCATIONS.load(Ordering::SeqCst) > before && probe.len() == 64);
     let first = frame(0.0);
-    let setup = FusionSetup::new(&k, &Mask::filled(w, h, true), &first, &MeshingOptions::default()).unwrap();
+    let setup = FusionSetup::new(
+        &k,
+        &Mask::filled(w, h, true),
+        &first,
+        &MeshingOptions::default(),
+    )
+    .unwrap();
     let system = FusionSystem::new(setup.ops.clone(), Weights::default()).unwrap();
     let mut fuser = Fuser::new(setup, system, 10.0);
     assert_eq!(fuser.process(&first).status, FrameStatus::Solved);
@@ -63,6 +69,11 @@ fn streaming_frames_allocate_nothing() {
         let after = ALLOCATIONS.load(Ordering::SeqCst);
         assert_eq!(r.status, FrameStatus::Solved);
         assert!(r.relative_residual < 1e-10 && quality.1.mean_abs_h > 0.0);
-        assert_eq!(after - before, 0, "a streaming frame allocated {} times", after - before);
+        assert_eq!(
+            after - before,
+            0,
+            "a streaming frame allocated {} times",
+            after - before
+        );
     }
 }
