@@ -31,6 +31,18 @@ pub fn depthwise_conv2d<M: Madd>(
             let base_y = oy * win.stride_h + ky0 - win.pad_top;
             let base_x = ox * win.stride_w + kx0 - win.pad_left;
             let mut cb = 0;
+            if win.k_h == 3 && win.k_w == 3 && ky1 - ky0 == 3 && kx1 - kx0 == 3 {
+                // Interior pixel of a 3×3 window: fixed trip counts, fully unrolled.
+                let (xb, wb) = ((base_y * win.in_w + base_x) * c, 0);
+                while cb + 16 <= c {
+                    full3::<M, 16>(x, w, b, win.in_w, c, cb, xb, wb, out);
+                    cb += 16;
+                }
+                while cb + 4 <= c {
+                    full3::<M, 4>(x, w, b, win.in_w, c, cb, xb, wb, out);
+                    cb += 4;
+                }
+            }
             while cb + 16 <= c {
                 tap_block::<M, 16>(
                     x,
@@ -92,6 +104,35 @@ pub(super) fn valid_taps(
     (k0, k1)
 }
 
+/// [`tap_block`] for an interior pixel of a 3×3 window whose top-left tap is at `xb`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn full3<M: Madd, const NB: usize>(
+    x: &[f32],
+    w: &[f32],
+    b: &[f32],
+    in_w: usize,
+    c: usize,
+    cb: usize,
+    xb: usize,
+    wb: usize,
+    out: &mut [f32],
+) {
+    let mut acc: [f32; NB] = b[cb..cb + NB].try_into().unwrap_or([0.0; NB]);
+    for ky in 0..3 {
+        for kx in 0..3 {
+            let xi = xb + (ky * in_w + kx) * c + cb;
+            let wi = wb + (ky * 3 + kx) * c + cb;
+            let xr: &[f32; NB] = x[xi..xi + NB].try_into().unwrap_or(&[0.0; NB]);
+            let wr: &[f32; NB] = w[wi..wi + NB].try_into().unwrap_or(&[0.0; NB]);
+            for j in 0..NB {
+                acc[j] = M::madd(xr[j], wr[j], acc[j]);
+            }
+        }
+    }
+    out[cb..cb + NB].copy_from_slice(&acc);
+}
+
 /// Channels `cb .. cb + NB` of one output pixel, accumulated in registers.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
@@ -146,5 +187,44 @@ mod tests {
         depthwise_conv2d::<crate::ops::Fused>(&[1.0; 16], &win2, 1, &[1.0; 9], &[0.0], &mut y2);
         // TF SAME with stride 2 on 4: pad 0 before, 1 after.
         assert_eq!(y2, vec![9.0, 6.0, 6.0, 4.0]);
+    }
+
+    #[test]
+    fn matches_direct_definition_on_many_channels() {
+        let mut seed = 7u32;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+        };
+        for &(h, w, c, s) in &[(6, 7, 24, 1), (8, 8, 21, 2), (5, 5, 36, 1), (4, 9, 3, 1)] {
+            let win = Window::new(h, w, [3, 3], [s, s], Padding::Same);
+            let x: Vec<f32> = (0..h * w * c).map(|_| rnd()).collect();
+            let k: Vec<f32> = (0..9 * c).map(|_| rnd()).collect();
+            let b: Vec<f32> = (0..c).map(|_| rnd()).collect();
+            let mut y = vec![0.0; win.out_h * win.out_w * c];
+            depthwise_conv2d::<crate::ops::Plain>(&x, &win, c, &k, &b, &mut y);
+            for oy in 0..win.out_h {
+                for ox in 0..win.out_w {
+                    for ch in 0..c {
+                        let mut acc = b[ch] as f64;
+                        for ky in 0..3 {
+                            for kx in 0..3 {
+                                let iy = (oy * s + ky) as isize - win.pad_top as isize;
+                                let ix = (ox * s + kx) as isize - win.pad_left as isize;
+                                if iy >= 0 && ix >= 0 && (iy as usize) < h && (ix as usize) < w {
+                                    acc += x[((iy as usize) * w + ix as usize) * c + ch] as f64
+                                        * k[(ky * 3 + kx) * c + ch] as f64;
+                                }
+                            }
+                        }
+                        let got = y[(oy * win.out_w + ox) * c + ch] as f64;
+                        assert!(
+                            (got - acc).abs() < 1e-5,
+                            "{h}x{w}x{c} s{s} at ({oy},{ox},{ch}): {got} vs {acc}"
+                        );
+                    }
+                }
+            }
+        }
     }
 }
