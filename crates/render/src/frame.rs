@@ -227,72 +227,124 @@ impl Renderer {
             .enumerate()
             .for_each(|(y, (((c_row, d_row), t_row), b_row))| {
                 let setups = raster.visibility_row(y);
-                let yr = (y as f64 - k.cy) * inv_fy;
+                let yf = y as f64;
+                let yr = (yf - k.cy) * inv_fy;
                 let yr2_plus_1 = yr * yr + 1.0;
-                for x in 0..w {
-                    let Some(f) = raster.fragment_in_row(setups, x, y) else {
-                        c_row[x] = scene.background;
-                        d_row[x] = 0.0;
-                        if let Some(t) = t_row.get_mut(x) {
-                            *t = NO_TRIANGLE;
+                // The row in spans of equal set-up id: per-triangle work (indices, corner
+                // attributes, row-constant edge terms) is done once per span, not per pixel.
+                let mut x = 0;
+                while x < w {
+                    let s = setups[x];
+                    let end = x + setups[x..].iter().take_while(|&&t| t == s).count();
+                    let st = if s == NO_TRIANGLE {
+                        None
+                    } else {
+                        raster.setup(s)
+                    };
+                    let Some(st) = st else {
+                        c_row[x..end].fill(scene.background);
+                        d_row[x..end].fill(0.0);
+                        if let Some(t) = t_row.get_mut(x..end) {
+                            t.fill(NO_TRIANGLE);
                         }
-                        if let Some(b) = b_row.get_mut(x) {
-                            *b = [0.0; 3];
+                        if let Some(b) = b_row.get_mut(x..end) {
+                            b.fill([0.0; 3]);
                         }
+                        x = end;
                         continue;
                     };
+                    let triangle = st.triangle();
                     // Indices were validated before rasterisation.
-                    let t = mesh.triangles[f.triangle as usize].map(|i| i as usize);
-                    let b = f.bary;
-                    // The surface point is z · (x', y', 1) on this pixel's ray, so the unit view
-                    // vector (surface → eye) and |p|/z come from the ray alone.
-                    let xr = (x as f64 - k.cx) * inv_fx;
-                    let r_len = (xr * xr + yr2_plus_1).sqrt();
-                    let inv = -1.0 / r_len;
-                    let view = [(xr * inv) as f32, (yr * inv) as f32, inv as f32];
-                    let (n0, n1, n2) = (normals[t[0]], normals[t[1]], normals[t[2]]);
-                    let (b0, b1, b2) = (b[0] as f32, b[1] as f32, b[2] as f32);
-                    let mut n: [f32; 3] =
-                        std::array::from_fn(|j| b0 * n0[j] + b1 * n1[j] + b2 * n2[j]);
-                    let n_len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-                    if n_len > 0.0 {
-                        let inv = 1.0 / n_len;
-                        n = n.map(|v| v * inv);
-                    }
-                    if scene.two_sided && n[0] * view[0] + n[1] * view[1] + n[2] * view[2] < 0.0 {
-                        n = n.map(|v| -v);
-                    }
-                    let albedo = match scene.albedo {
+                    let t = mesh.triangles[triangle as usize].map(|i| i as usize);
+                    // Attributes at the set-up's corners (mesh barycentrics `B`, row per
+                    // corner): a pixel's attribute is `Σ_i w_i · (B a)_i` with the corner
+                    // weights `w`, which equals `Σ_j bary_j a_j`.
+                    let bc = st.corner_bary();
+                    let at_corners = |a: [[f32; 3]; 3]| -> [[f32; 3]; 3] {
+                        std::array::from_fn(|i| {
+                            std::array::from_fn(|c| {
+                                bc[i][0] * a[0][c] + bc[i][1] * a[1][c] + bc[i][2] * a[2][c]
+                            })
+                        })
+                    };
+                    let corner_normals = at_corners(t.map(|i| normals[i]));
+                    let corner_albedo = match scene.albedo {
                         Albedo::Texture { texture, wrap } => {
-                            let (u0, u1, u2) = (mesh.uvs[t[0]], mesh.uvs[t[1]], mesh.uvs[t[2]]);
-                            let uv = [
-                                b[0] * u0[0] + b[1] * u1[0] + b[2] * u2[0],
-                                b[0] * u0[1] + b[1] * u1[1] + b[2] * u2[1],
-                            ];
-                            let s = texture.sample(uv, wrap);
-                            [s[0], s[1], s[2]]
+                            let uv = t.map(|i| mesh.uvs[i]);
+                            let cuv: [[f64; 2]; 3] = std::array::from_fn(|i| {
+                                let b = bc[i].map(f64::from);
+                                std::array::from_fn(|c| {
+                                    b[0] * uv[0][c] + b[1] * uv[1][c] + b[2] * uv[2][c]
+                                })
+                            });
+                            CornerAlbedo::Texture(texture, wrap, cuv)
                         }
                         Albedo::VertexColors => {
-                            let (c0, c1, c2) =
-                                (mesh.colors[t[0]], mesh.colors[t[1]], mesh.colors[t[2]]);
-                            std::array::from_fn(|j| b0 * c0[j] + b1 * c1[j] + b2 * c2[j])
+                            CornerAlbedo::Colors(at_corners(t.map(|i| mesh.colors[i])))
                         }
-                        Albedo::Constant(c) => c,
+                        Albedo::Constant(c) => CornerAlbedo::Constant(c),
                     };
-                    c_row[x] = shader.shade(n, view, albedo);
-                    let value = match kind {
-                        DepthKind::Z => f.z,
-                        DepthKind::Ray => f.z * r_len,
-                    };
-                    d_row[x] = value as f32;
-                    if let Some(t) = t_row.get_mut(x) {
-                        *t = f.triangle;
+                    let rows = st.rows(yf);
+                    for x in x..end {
+                        let (wt, z) = st.corner_weights(&rows, x as f64);
+                        let wf = wt.map(|v| v as f32);
+                        // The surface point is z · (x', y', 1) on this pixel's ray, so the
+                        // unit view vector (surface → eye) and |p|/z come from the ray alone.
+                        let xr = (x as f64 - k.cx) * inv_fx;
+                        let r_len = (xr * xr + yr2_plus_1).sqrt();
+                        let inv = -1.0 / r_len;
+                        let view = [(xr * inv) as f32, (yr * inv) as f32, inv as f32];
+                        let cn = &corner_normals;
+                        let mut n: [f32; 3] = std::array::from_fn(|c| {
+                            wf[0] * cn[0][c] + wf[1] * cn[1][c] + wf[2] * cn[2][c]
+                        });
+                        let n_len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                        if n_len > 0.0 {
+                            let inv = 1.0 / n_len;
+                            n = n.map(|v| v * inv);
+                        }
+                        if scene.two_sided && n[0] * view[0] + n[1] * view[1] + n[2] * view[2] < 0.0
+                        {
+                            n = n.map(|v| -v);
+                        }
+                        let albedo = match &corner_albedo {
+                            CornerAlbedo::Texture(texture, wrap, cuv) => {
+                                let uv = std::array::from_fn(|c| {
+                                    wt[0] * cuv[0][c] + wt[1] * cuv[1][c] + wt[2] * cuv[2][c]
+                                });
+                                texture.sample_rgb(uv, *wrap)
+                            }
+                            CornerAlbedo::Colors(cc) => std::array::from_fn(|c| {
+                                wf[0] * cc[0][c] + wf[1] * cc[1][c] + wf[2] * cc[2][c]
+                            }),
+                            CornerAlbedo::Constant(c) => *c,
+                        };
+                        c_row[x] = shader.shade(n, view, albedo);
+                        let value = match kind {
+                            DepthKind::Z => z,
+                            DepthKind::Ray => z * r_len,
+                        };
+                        d_row[x] = value as f32;
+                        if let Some(t) = t_row.get_mut(x) {
+                            *t = triangle;
+                        }
+                        if let Some(bb) = b_row.get_mut(x) {
+                            *bb = st.mesh_bary(&wt).map(|v| v as f32);
+                        }
                     }
-                    if let Some(bb) = b_row.get_mut(x) {
-                        *bb = [b0, b1, b2];
-                    }
+                    x = end;
                 }
             });
         Ok(())
     }
+}
+
+/// A span's surface-colour source with its attributes taken to the set-up's corners.
+enum CornerAlbedo<'a> {
+    /// Texture, wrap mode and texture coordinates of the three corners.
+    Texture(&'a Texture, Wrap, [[f64; 2]; 3]),
+    /// Vertex colours at the three corners.
+    Colors([[f32; 3]; 3]),
+    /// One colour.
+    Constant([f32; 3]),
 }

@@ -245,7 +245,7 @@ impl Rasterizer {
 
     /// The set-up with id `s` (`chunk << 16 | index`).
     #[inline(always)]
-    fn setup(&self, s: u32) -> Option<&ScreenTriangle> {
+    pub(crate) fn setup(&self, s: u32) -> Option<&ScreenTriangle> {
         self.setup_chunks
             .get((s >> 16) as usize)?
             .get((s & 0xffff) as usize)
@@ -259,16 +259,6 @@ impl Rasterizer {
     pub(crate) fn visibility_row(&self, y: usize) -> &[u32] {
         let w = self.width as usize;
         &self.index[y * w..(y + 1) * w]
-    }
-
-    /// The fragment at column `x` of row `y`, whose visibility row is `row`.
-    #[inline(always)]
-    pub(crate) fn fragment_in_row(&self, row: &[u32], x: usize, y: usize) -> Option<Fragment> {
-        let s = *row.get(x)?;
-        if s == NO_TRIANGLE {
-            return None;
-        }
-        Some(self.setup(s)?.fragment(x as f64, y as f64))
     }
 
     /// The set-ups of the last frame, in triangle order (for coverage tests and custom passes).
@@ -292,22 +282,53 @@ impl ScreenTriangle {
     /// Perspective-correct reconstruction at pixel centre `(x, y)` (assumed covered).
     #[inline(always)]
     fn fragment(&self, x: f64, y: f64) -> Fragment {
-        let e: [f64; 3] = std::array::from_fn(|i| self.edges[i].eval(self.edges[i].row(y), x));
+        let (w, z) = self.corner_weights(&self.rows(y), x);
+        Fragment {
+            triangle: self.triangle,
+            z,
+            bary: self.mesh_bary(&w),
+            front_facing: self.front_facing,
+        }
+    }
+
+    /// The row-constant parts of the three edge functions at pixel row `y` (hoisted out of a
+    /// span of pixels; [`ScreenTriangle::corner_weights`] takes them).
+    #[inline(always)]
+    pub(crate) fn rows(&self, y: f64) -> [f64; 3] {
+        std::array::from_fn(|i| self.edges[i].row(y))
+    }
+
+    /// Perspective-correct weights of this set-up's three corners at pixel centre `(x, y)`
+    /// (`rows = self.rows(y)`, the centre assumed covered), and the camera depth `z` there.
+    ///
+    /// The same operations in the same order as [`Rasterizer::fragment`], so depth is
+    /// bit-identical between the colour and the depth renderer.
+    #[inline(always)]
+    pub(crate) fn corner_weights(&self, rows: &[f64; 3], x: f64) -> ([f64; 3], f64) {
+        let e: [f64; 3] = std::array::from_fn(|i| self.edges[i].eval(rows[i], x));
         // λ_i = e_i / Σe; 1/z = Σ λ_i / w_i; perspective-correct weights (λ_i / w_i) · z.
         let sum = e[0] + e[1] + e[2];
         let q: [f64; 3] = std::array::from_fn(|i| e[i] * self.inv_w[i]);
         let inv_s = 1.0 / (q[0] + q[1] + q[2]);
         let w: [f64; 3] = std::array::from_fn(|i| q[i] * inv_s);
+        (w, sum * inv_s)
+    }
+
+    /// Barycentrics in the mesh triangle from corner weights `w` (see
+    /// [`ScreenTriangle::corner_weights`]).
+    #[inline(always)]
+    pub(crate) fn mesh_bary(&self, w: &[f64; 3]) -> [f64; 3] {
         let b = &self.bary;
-        let bary = std::array::from_fn(|j| {
+        std::array::from_fn(|j| {
             w[0] * b[0][j] as f64 + w[1] * b[1][j] as f64 + w[2] * b[2][j] as f64
-        });
-        Fragment {
-            triangle: self.triangle,
-            z: sum * inv_s,
-            bary,
-            front_facing: self.front_facing,
-        }
+        })
+    }
+
+    /// Barycentric coordinates of the set-up's corners in the mesh triangle: row `i` is corner
+    /// `i` (identity rows up to order unless the triangle was clipped).
+    #[inline(always)]
+    pub(crate) fn corner_bary(&self) -> &[[f32; 3]; 3] {
+        &self.bary
     }
 }
 

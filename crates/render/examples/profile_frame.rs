@@ -1,0 +1,81 @@
+//! Renders the benchmark scene of `benches/render_frame.rs` a given number of times, for
+//! instruction-count profiling (`valgrind --tool=callgrind`), which criterion's timing loop does
+//! not suit: `cargo run --release -p visage-render --example profile_frame -- 5`.
+
+use visage_camera::{DepthKind, Intrinsics};
+use visage_mesh::TriMesh;
+use visage_render::{Albedo, Camera, Frame, Mat4, Renderer, Scene, Texture, Wrap};
+
+fn face_like_mesh() -> TriMesh {
+    let (nu, nv) = (124u32, 123u32);
+    let (w, h) = (0.5, 0.28);
+    let mut m = TriMesh::default();
+    for j in 0..nv {
+        for i in 0..nu {
+            let (s, t) = (i as f64 / (nu - 1) as f64, j as f64 / (nv - 1) as f64);
+            let (x, y) = ((s - 0.5) * w, (t - 0.5) * h);
+            // A dome with ripples: depth varies by a few centimetres like a face.
+            let z = 0.5 + 4.0 * (x * x + y * y) - 0.01 * (40.0 * x).sin() * (30.0 * y).cos();
+            m.vertices.push([x, y, z]);
+            m.uvs.push([s, 1.0 - t]);
+        }
+    }
+    for j in 0..nv - 1 {
+        for i in 0..nu - 1 {
+            let a = j * nu + i;
+            let (b, c, d) = (a + 1, a + nu + 1, a + nu);
+            m.triangles.push([a, c, b]);
+            m.triangles.push([a, d, c]);
+        }
+    }
+    m
+}
+
+fn texture() -> Texture {
+    let n = 1024u32;
+    let texels = (0..n * n)
+        .map(|k| {
+            let (i, j) = (k % n, k / n);
+            let c = if (i / 64 + j / 64) % 2 == 0 { 0.8 } else { 0.3 };
+            [c, 0.6 * c, 0.5 * c, 1.0]
+        })
+        .collect();
+    Texture::new(n, n, texels).expect("valid texture")
+}
+
+fn main() {
+    let frames: usize = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(1);
+    let k = Intrinsics::new(1280, 720, 1000.0, 1000.0, 639.5, 359.5).expect("valid intrinsics");
+    let camera = Camera::new(k).expect("valid camera");
+    let mesh = face_like_mesh();
+    let tex = texture();
+    let scene = Scene {
+        albedo: Albedo::Texture {
+            texture: &tex,
+            wrap: Wrap::Clamp,
+        },
+        ..Scene::default()
+    };
+    let mut renderer = Renderer::new();
+    let mut images = Frame::color_and_depth(k.width, k.height, DepthKind::Z);
+    let start = std::time::Instant::now();
+    for _ in 0..frames {
+        renderer
+            .render(&mesh, &camera, &Mat4::IDENTITY, &scene, &mut images)
+            .expect("renders");
+    }
+    let checksum: f64 = images
+        .color
+        .iter()
+        .flatten()
+        .map(|&c| c as f64)
+        .sum::<f64>()
+        + images.depth.data.iter().map(|&d| d as f64).sum::<f64>();
+    eprintln!(
+        "{frames} frames, {:.2} ms/frame wall, checksum {checksum:.6}",
+        start.elapsed().as_secs_f64() * 1e3 / frames as f64
+    );
+}
