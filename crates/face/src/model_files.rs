@@ -23,7 +23,7 @@ pub const NPM_TARBALL_SHA256: &str =
     "c08a7e0742a326285da666cf81d77c8b6f3a181a2ee948cadaf166008e0d3bc7";
 /// Environment variable that overrides the model directory.
 pub const MODELS_ENV: &str = "VISAGE_MODELS";
-/// Model directory used when [`MODELS_ENV`] is unset, relative to the working directory.
+/// Model directory name, relative to the working directory (see [`models_dir`]).
 pub const DEFAULT_MODELS_DIR: &str = "models";
 
 const PACKED_DATA: &str = "package/face_mesh_solution_packed_assets.data";
@@ -103,9 +103,27 @@ impl ModelFile {
     }
 }
 
-/// The model directory: `$VISAGE_MODELS` if set, else `./models`.
+/// The model directory: `$VISAGE_MODELS` if set; else `./models` if it exists; else the first
+/// `models/` folder found beside the running executable or one of its ancestors (so
+/// `target/release/visage` finds the checkout's `models/` from any working directory); else
+/// `./models` (where `visage models fetch` writes by default).
 pub fn models_dir() -> PathBuf {
-    std::env::var_os(MODELS_ENV).map_or_else(|| PathBuf::from(DEFAULT_MODELS_DIR), PathBuf::from)
+    if let Some(dir) = std::env::var_os(MODELS_ENV) {
+        return PathBuf::from(dir);
+    }
+    let local = PathBuf::from(DEFAULT_MODELS_DIR);
+    if local.is_dir() {
+        return local;
+    }
+    std::env::current_exe()
+        .ok()
+        .and_then(|exe| {
+            exe.ancestors()
+                .skip(1)
+                .map(|a| a.join(DEFAULT_MODELS_DIR))
+                .find(|d| d.is_dir())
+        })
+        .unwrap_or(local)
 }
 
 /// Lower-case hex SHA-256 of `bytes`.
