@@ -34,7 +34,7 @@ pub struct LandmarksArgs {
     /// Horizontal field of view (degrees) when no intrinsics file is given.
     #[arg(long)]
     fov_deg: Option<f64>,
-    /// Model directory; default: $VISAGE_MODELS, else ./models (see `visage models fetch`).
+    /// Model directory; default: $VISAGE_MODELS, else ./models or a models/ folder beside the executable (see `visage models fetch`).
     #[arg(long)]
     models: Option<PathBuf>,
 }

@@ -30,7 +30,7 @@ enum ModelsAction {
     },
     /// Verify the model files (present, sha256) and print where they are.
     Check {
-        /// Model directory; default: $VISAGE_MODELS, else ./models.
+        /// Model directory; default: $VISAGE_MODELS, else ./models, else a models/ folder beside the executable.
         #[arg(long)]
         dir: Option<PathBuf>,
     },
@@ -68,7 +68,7 @@ pub fn run(args: ModelsArgs) -> anyhow::Result<()> {
                 f.read(&dir)?;
                 println!("ok  {}  {}", f.sha256(), dir.join(f.file_name()).display());
             }
-            eprintln!("(model directory: --dir, else ${MODELS_ENV}, else ./models)");
+            eprintln!("(model directory: --dir, else ${MODELS_ENV}, else ./models, else models/ beside the executable)");
             Ok(())
         }
     }
