@@ -1,0 +1,45 @@
+//! visage-eval: the ground-truth benchmark (issue #5). The paper reports no error against
+//! ground truth; this crate measures it, on synthetic sequences where the truth is known.
+//!
+//! Pipeline: [`synthesize`] an ICT-FaceKit face sequence (seeded identity, expression
+//! trajectories, head motion, camera 0.4–0.8 m away) and render its exact depth with
+//! `visage-render` → corrupt the depth with a [`NoiseModel`] that mimics a CNN's errors →
+//! run every [`Method`] on the same noisy input → score against the truth ([`metrics`]:
+//! point-to-mesh RMSE/median, jitter, lag, curvature improvement and roughness per ERRATA 13,
+//! time per frame) → [`write_results`] (`results.json`, `results.csv`, SVG plots) and
+//! [`table`].
+//!
+//! Everything is deterministic given the configuration and seed, except the `ms_per_frame`
+//! timing fields.
+
+mod benchmark;
+mod error;
+mod method;
+pub mod metrics;
+mod noise;
+mod normal;
+pub mod point_to_mesh;
+mod report;
+mod svg_plot;
+mod synthesis;
+mod taubin;
+mod trajectory;
+
+pub use benchmark::{
+    methods, mix_seed, run_benchmark, run_sweep, sequence_seed, tune_taubin, BenchmarkConfig,
+    BenchmarkResults, PreparedSequence, SequenceInfo, SweepPoint, TaubinTuning, QUICK_EXPRESSIONS,
+    TUNING_SALT,
+};
+pub use error::EvalError;
+pub use method::{Method, MethodInput, MethodRun};
+pub use metrics::{evaluate_sequence, MethodSummary, MetricAccumulator, PerFrame};
+pub use noise::{NoiseGenerator, NoiseModel, NOISE_PRESETS};
+pub use normal::standard_normal;
+pub use report::{csv, table, write_results, write_sweep};
+pub use svg_plot::{heatmap_svg, line_chart_svg, Series};
+pub use synthesis::{
+    synthesize, SynthesisConfig, SyntheticFrame, SyntheticSequence, EXPRESSION_ACTIVITY,
+    PIVOT_DEPTH_M,
+};
+pub use taubin::{taubin_smooth, TAUBIN_LAMBDA, TAUBIN_MU};
+pub use trajectory::{keyframe_trajectory, smoothstep, SEGMENT_FRAMES};
