@@ -55,7 +55,8 @@ impl Edge {
     /// Whether a value `e = E(p)` puts `p` inside this edge's half-plane under the fill rule.
     #[inline(always)]
     pub fn inside(&self, e: f64) -> bool {
-        e > 0.0 || (e == 0.0 && self.owns_ties)
+        // Non-short-circuit `|`/`&`: no branches in the scan loop.
+        (e > 0.0) | ((e == 0.0) & self.owns_ties)
     }
 }
 

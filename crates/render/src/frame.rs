@@ -6,7 +6,7 @@ use visage_mesh::TriMesh;
 
 use crate::camera::Camera;
 use crate::mat4::{Mat3, Mat4};
-use crate::normals::{normal_matrix, transform_normal, vertex_normals};
+use crate::normals::{normal_matrix, transform_normal, vertex_normals_into};
 use crate::rasterize::{CullMode, Rasterizer, NO_TRIANGLE};
 use crate::shading::{BlinnPhong, Light, Material};
 use crate::texture::{Texture, Wrap};
@@ -189,7 +189,7 @@ impl Renderer {
 
         // Step 3 of Algorithm 3: normals to camera space (Eq. (6.2)).
         let object_normals: &[[f64; 3]] = if mesh.normals.is_empty() {
-            self.object_normals = vertex_normals(&mesh.vertices, &mesh.triangles);
+            vertex_normals_into(&mesh.vertices, &mesh.triangles, &mut self.object_normals);
             &self.object_normals
         } else {
             &mesh.normals
@@ -230,6 +230,7 @@ impl Renderer {
                 let yf = y as f64;
                 let yr = (yf - k.cy) * inv_fy;
                 let yr2_plus_1 = yr * yr + 1.0;
+                let (yr32, yr2_plus_1_32) = (yr as f32, yr2_plus_1 as f32);
                 // The row in spans of equal set-up id: per-triangle work (indices, corner
                 // attributes, row-constant edge terms) is done once per span, not per pixel.
                 let mut x = 0;
@@ -290,10 +291,11 @@ impl Renderer {
                         let wf = wt.map(|v| v as f32);
                         // The surface point is z · (x', y', 1) on this pixel's ray, so the
                         // unit view vector (surface → eye) and |p|/z come from the ray alone.
+                        // `f32` suffices for shading; ray depth takes `|p|/z` in `f64` below.
                         let xr = (x as f64 - k.cx) * inv_fx;
-                        let r_len = (xr * xr + yr2_plus_1).sqrt();
-                        let inv = -1.0 / r_len;
-                        let view = [(xr * inv) as f32, (yr * inv) as f32, inv as f32];
+                        let xr32 = xr as f32;
+                        let inv = -1.0 / (xr32 * xr32 + yr2_plus_1_32).sqrt();
+                        let view = [xr32 * inv, yr32 * inv, inv];
                         let cn = &corner_normals;
                         let mut n: [f32; 3] = std::array::from_fn(|c| {
                             wf[0] * cn[0][c] + wf[1] * cn[1][c] + wf[2] * cn[2][c]
@@ -322,7 +324,7 @@ impl Renderer {
                         c_row[x] = shader.shade(n, view, albedo);
                         let value = match kind {
                             DepthKind::Z => z,
-                            DepthKind::Ray => z * r_len,
+                            DepthKind::Ray => z * (xr * xr + yr2_plus_1).sqrt(),
                         };
                         d_row[x] = value as f32;
                         if let Some(t) = t_row.get_mut(x) {

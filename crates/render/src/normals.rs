@@ -31,7 +31,16 @@ pub fn transform_normal(n: &Mat3, normal: [f64; 3]) -> [f64; 3] {
 /// # Panics
 /// If a triangle index is out of range (callers validate meshes first).
 pub fn vertex_normals(vertices: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
-    let mut acc = vec![[0.0; 3]; vertices.len()];
+    let mut normals = Vec::new();
+    vertex_normals_into(vertices, triangles, &mut normals);
+    normals
+}
+
+/// [`vertex_normals`] into a caller-owned buffer (resized to #V; no allocation once it has
+/// grown), for per-frame use.
+pub fn vertex_normals_into(vertices: &[[f64; 3]], triangles: &[[u32; 3]], acc: &mut Vec<[f64; 3]>) {
+    acc.clear();
+    acc.resize(vertices.len(), [0.0; 3]);
     for t in triangles {
         let [a, b, c] = t.map(|i| vertices[i as usize]);
         let n = cross(sub(b, a), sub(c, a));
@@ -42,7 +51,9 @@ pub fn vertex_normals(vertices: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64
             s[2] += n[2];
         }
     }
-    acc.into_iter().map(normalize).collect()
+    for n in acc.iter_mut() {
+        *n = normalize(*n);
+    }
 }
 
 #[cfg(test)]

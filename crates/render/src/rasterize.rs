@@ -340,12 +340,18 @@ fn scan(st: &ScreenTriangle, y0: i32, y1: i32, mut f: impl FnMut(i32, i32, f32))
     for y in y0..=y1 {
         let yf = y as f64;
         let (r0, r1, r2) = (e0.row(yf), e1.row(yf), e2.row(yf));
+        // Each edge function is monotone in x (every operation of `Edge::eval` rounds
+        // monotonically), so the covered centres of a row are one run: stop at its end.
+        let mut in_run = false;
         for x in st.x0..=st.x1 {
             let xf = x as f64;
             let (a, b, c) = (e0.eval(r0, xf), e1.eval(r1, xf), e2.eval(r2, xf));
-            if e0.inside(a) && e1.inside(b) && e2.inside(c) {
+            if e0.inside(a) & e1.inside(b) & e2.inside(c) {
+                in_run = true;
                 let z = (a + b + c) / (a * w0 + b * w1 + c * w2);
                 f(x, y, z as f32);
+            } else if in_run {
+                break;
             }
         }
     }
