@@ -272,13 +272,15 @@ impl Renderer {
                     let corner_albedo = match scene.albedo {
                         Albedo::Texture { texture, wrap } => {
                             let uv = t.map(|i| mesh.uvs[i]);
-                            let cuv: [[f64; 2]; 3] = std::array::from_fn(|i| {
+                            // Texel-space positions of the corners (affine in UV, so they
+                            // interpolate like UVs).
+                            let cxy: [[f64; 2]; 3] = std::array::from_fn(|i| {
                                 let b = bc[i].map(f64::from);
-                                std::array::from_fn(|c| {
+                                texture.texel_coords(std::array::from_fn(|c| {
                                     b[0] * uv[0][c] + b[1] * uv[1][c] + b[2] * uv[2][c]
-                                })
+                                }))
                             });
-                            CornerAlbedo::Texture(texture, wrap, cuv)
+                            CornerAlbedo::Texture(texture, wrap, cxy)
                         }
                         Albedo::VertexColors => {
                             CornerAlbedo::Colors(at_corners(t.map(|i| mesh.colors[i])))
@@ -310,11 +312,11 @@ impl Renderer {
                             n = n.map(|v| -v);
                         }
                         let albedo = match &corner_albedo {
-                            CornerAlbedo::Texture(texture, wrap, cuv) => {
-                                let uv = std::array::from_fn(|c| {
-                                    wt[0] * cuv[0][c] + wt[1] * cuv[1][c] + wt[2] * cuv[2][c]
+                            CornerAlbedo::Texture(texture, wrap, cxy) => {
+                                let xy = std::array::from_fn(|c| {
+                                    wt[0] * cxy[0][c] + wt[1] * cxy[1][c] + wt[2] * cxy[2][c]
                                 });
-                                texture.sample_rgb(uv, *wrap)
+                                texture.sample_rgb_at(xy, *wrap)
                             }
                             CornerAlbedo::Colors(cc) => std::array::from_fn(|c| {
                                 wf[0] * cc[0][c] + wf[1] * cc[1][c] + wf[2] * cc[2][c]
@@ -343,7 +345,8 @@ impl Renderer {
 
 /// A span's surface-colour source with its attributes taken to the set-up's corners.
 enum CornerAlbedo<'a> {
-    /// Texture, wrap mode and texture coordinates of the three corners.
+    /// Texture, wrap mode and texel-space positions ([`Texture::texel_coords`]) of the three
+    /// corners.
     Texture(&'a Texture, Wrap, [[f64; 2]; 3]),
     /// Vertex colours at the three corners.
     Colors([[f32; 3]; 3]),

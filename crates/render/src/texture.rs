@@ -164,29 +164,65 @@ impl Texture {
     /// weights, with the wrapped texel columns and rows computed once per sample (not once per
     /// tap) and the 16-bit scale applied once to the weighted sum. Agrees with
     /// [`Texture::sample`] to `f32` rounding (≈ 10⁻⁷).
-    #[inline(always)]
+    #[cfg(test)]
     pub(crate) fn sample_rgb(&self, uv: [f64; 2], wrap: Wrap) -> [f32; 3] {
-        if !(uv[0].is_finite() && uv[1].is_finite()) {
+        self.sample_rgb_at(self.texel_coords(uv), wrap)
+    }
+
+    /// Texel-space position of texture coordinates `uv`: `(u·W − ½, (1 − v)·H − ½)`, texel
+    /// centres at integers. Affine in `uv`, so it can be interpolated instead of `uv`.
+    #[inline(always)]
+    pub(crate) fn texel_coords(&self, uv: [f64; 2]) -> [f64; 2] {
+        [
+            uv[0] * self.width as f64 - 0.5,
+            (1.0 - uv[1]) * self.height as f64 - 0.5,
+        ]
+    }
+
+    /// [`Texture::sample_rgb`] at a texel-space position (see [`Texture::texel_coords`]).
+    #[inline(always)]
+    pub(crate) fn sample_rgb_at(&self, xy: [f64; 2], wrap: Wrap) -> [f32; 3] {
+        let [x, y] = xy;
+        if !(x.is_finite() && y.is_finite()) {
             return [0.0; 3];
         }
         let (w, h) = (self.width as i64, self.height as i64);
-        let x = (uv[0] * w as f64 - 0.5).clamp(-1e9, 1e9);
-        let y = ((1.0 - uv[1]) * h as f64 - 0.5).clamp(-1e9, 1e9);
+        // floor without a libm call on baseline x86-64: truncate, then step down for negatives.
         let floor = |v: f64| {
             let t = v as i64;
             t - (t as f64 > v) as i64
         };
-        let (i, j) = (floor(x), floor(y));
-        let (fx, fy) = ((x - i as f64) as f32, (y - j as f64) as f32);
-        let ((i0, i1), (j0, j1)) = match wrap {
-            Wrap::Clamp => (
-                (i.clamp(0, w - 1), (i + 1).clamp(0, w - 1)),
-                (j.clamp(0, h - 1), (j + 1).clamp(0, h - 1)),
-            ),
-            Wrap::Repeat => (
-                (i.rem_euclid(w), (i + 1).rem_euclid(w)),
-                (j.rem_euclid(h), (j + 1).rem_euclid(h)),
-            ),
+        let (i0, i1, j0, j1, fx, fy) = match wrap {
+            Wrap::Clamp => {
+                // Left of column 0 or right of column W − 1 both taps are the border texel
+                // whatever the weights: clamping the position to [-1, W − 1] first leaves the
+                // same sample and needs one bound per tap (likewise for rows).
+                let (x, y) = (x.clamp(-1.0, (w - 1) as f64), y.clamp(-1.0, (h - 1) as f64));
+                let (i, j) = (floor(x), floor(y));
+                let (fx, fy) = ((x - i as f64) as f32, (y - j as f64) as f32);
+                (
+                    i.max(0),
+                    (i + 1).min(w - 1),
+                    j.max(0),
+                    (j + 1).min(h - 1),
+                    fx,
+                    fy,
+                )
+            }
+            Wrap::Repeat => {
+                // Beyond ±2³⁰ texels any position has long repeated.
+                let (x, y) = (x.clamp(-1e9, 1e9), y.clamp(-1e9, 1e9));
+                let (i, j) = (floor(x), floor(y));
+                let (fx, fy) = ((x - i as f64) as f32, (y - j as f64) as f32);
+                (
+                    i.rem_euclid(w),
+                    (i + 1).rem_euclid(w),
+                    j.rem_euclid(h),
+                    (j + 1).rem_euclid(h),
+                    fx,
+                    fy,
+                )
+            }
         };
         let (r0, r1) = ((j0 * w) as usize, (j1 * w) as usize);
         let (i0, i1) = (i0 as usize, i1 as usize);
