@@ -7,7 +7,7 @@ use visage_mesh::TriMesh;
 use crate::camera::Camera;
 use crate::mat4::{Mat3, Mat4};
 use crate::normals::{normal_matrix, transform_normal, vertex_normals_into};
-use crate::rasterize::{CullMode, Rasterizer, NO_TRIANGLE};
+use crate::rasterize::{CullMode, Rasterizer, ScreenTriangle, NO_TRIANGLE};
 use crate::shading::{BlinnPhong, Light, Material};
 use crate::texture::{Texture, Wrap};
 use crate::RenderError;
@@ -109,6 +109,8 @@ pub struct Renderer {
     rasterizer: Rasterizer,
     object_normals: Vec<[f64; 3]>,
     camera_normals: Vec<[f32; 3]>,
+    /// Per set-up corner attributes, indexed like the rasteriser's set-up chunks.
+    corners: Vec<Vec<CornerAttributes>>,
 }
 
 impl Renderer {
@@ -201,9 +203,26 @@ impl Renderer {
             .with_min_len(4096)
             .for_each(|(n, out)| *out = transform_normal(&nm, *n).map(|x| x as f32));
 
+        // Attributes at every set-up's corners, once per set-up (a set-up's pixels come in
+        // spans of about 3 on a few rows; doing this per span cost ~10% of the frame).
+        let normals = &self.camera_normals;
+        let chunks = self.rasterizer.setup_chunks();
+        self.corners.resize_with(chunks.len(), Vec::new);
+        chunks
+            .par_iter()
+            .zip(self.corners.par_iter_mut())
+            .for_each(|(chunk, out)| {
+                out.clear();
+                out.extend(
+                    chunk
+                        .iter()
+                        .map(|st| CornerAttributes::new(st, mesh, normals, &scene.albedo)),
+                );
+            });
+
         // Steps 7–10: one shading evaluation per visible pixel.
         let raster = &self.rasterizer;
-        let normals = &self.camera_normals;
+        let corners = &self.corners;
         let (inv_fx, inv_fy) = (1.0 / k.fx, 1.0 / k.fy);
         let kind = frame.depth.kind;
         let w = k.width as usize;
@@ -237,12 +256,14 @@ impl Renderer {
                 while x < w {
                     let s = setups[x];
                     let end = x + setups[x..].iter().take_while(|&&t| t == s).count();
-                    let st = if s == NO_TRIANGLE {
-                        None
-                    } else {
-                        raster.setup(s)
-                    };
-                    let Some(st) = st else {
+                    let id = ((s >> 16) as usize, (s & 0xffff) as usize);
+                    let found = (s != NO_TRIANGLE)
+                        .then(|| {
+                            let st = raster.setup_chunks().get(id.0)?.get(id.1)?;
+                            Some((st, corners.get(id.0)?.get(id.1)?))
+                        })
+                        .flatten();
+                    let Some((st, ca)) = found else {
                         c_row[x..end].fill(scene.background);
                         d_row[x..end].fill(0.0);
                         if let Some(t) = t_row.get_mut(x..end) {
@@ -255,38 +276,7 @@ impl Renderer {
                         continue;
                     };
                     let triangle = st.triangle();
-                    // Indices were validated before rasterisation.
-                    let t = mesh.triangles[triangle as usize].map(|i| i as usize);
-                    // Attributes at the set-up's corners (mesh barycentrics `B`, row per
-                    // corner): a pixel's attribute is `Σ_i w_i · (B a)_i` with the corner
-                    // weights `w`, which equals `Σ_j bary_j a_j`.
-                    let bc = st.corner_bary();
-                    let at_corners = |a: [[f32; 3]; 3]| -> [[f32; 3]; 3] {
-                        std::array::from_fn(|i| {
-                            std::array::from_fn(|c| {
-                                bc[i][0] * a[0][c] + bc[i][1] * a[1][c] + bc[i][2] * a[2][c]
-                            })
-                        })
-                    };
-                    let corner_normals = at_corners(t.map(|i| normals[i]));
-                    let corner_albedo = match scene.albedo {
-                        Albedo::Texture { texture, wrap } => {
-                            let uv = t.map(|i| mesh.uvs[i]);
-                            // Texel-space positions of the corners (affine in UV, so they
-                            // interpolate like UVs).
-                            let cxy: [[f64; 2]; 3] = std::array::from_fn(|i| {
-                                let b = bc[i].map(f64::from);
-                                texture.texel_coords(std::array::from_fn(|c| {
-                                    b[0] * uv[0][c] + b[1] * uv[1][c] + b[2] * uv[2][c]
-                                }))
-                            });
-                            CornerAlbedo::Texture(texture, wrap, cxy)
-                        }
-                        Albedo::VertexColors => {
-                            CornerAlbedo::Colors(at_corners(t.map(|i| mesh.colors[i])))
-                        }
-                        Albedo::Constant(c) => CornerAlbedo::Constant(c),
-                    };
+                    let corner_normals = &ca.normals;
                     let rows = st.rows(yf);
                     for x in x..end {
                         let (wt, z) = st.corner_weights(&rows, x as f64);
@@ -311,17 +301,21 @@ impl Renderer {
                         {
                             n = n.map(|v| -v);
                         }
-                        let albedo = match &corner_albedo {
-                            CornerAlbedo::Texture(texture, wrap, cxy) => {
+                        let albedo = match scene.albedo {
+                            Albedo::Texture { texture, wrap } => {
+                                let cxy = &ca.texel;
                                 let xy = std::array::from_fn(|c| {
                                     wt[0] * cxy[0][c] + wt[1] * cxy[1][c] + wt[2] * cxy[2][c]
                                 });
-                                texture.sample_rgb_at(xy, *wrap)
+                                texture.sample_rgb_at(xy, wrap)
                             }
-                            CornerAlbedo::Colors(cc) => std::array::from_fn(|c| {
-                                wf[0] * cc[0][c] + wf[1] * cc[1][c] + wf[2] * cc[2][c]
-                            }),
-                            CornerAlbedo::Constant(c) => *c,
+                            Albedo::VertexColors => {
+                                let cc = &ca.color;
+                                std::array::from_fn(|c| {
+                                    wf[0] * cc[0][c] + wf[1] * cc[1][c] + wf[2] * cc[2][c]
+                                })
+                            }
+                            Albedo::Constant(c) => c,
                         };
                         c_row[x] = shader.shade(n, view, albedo);
                         let value = match kind {
@@ -343,13 +337,53 @@ impl Renderer {
     }
 }
 
-/// A span's surface-colour source with its attributes taken to the set-up's corners.
-enum CornerAlbedo<'a> {
-    /// Texture, wrap mode and texel-space positions ([`Texture::texel_coords`]) of the three
-    /// corners.
-    Texture(&'a Texture, Wrap, [[f64; 2]; 3]),
-    /// Vertex colours at the three corners.
-    Colors([[f32; 3]; 3]),
-    /// One colour.
-    Constant([f32; 3]),
+/// Attributes at the three corners of a set-up (mesh barycentrics `B`, one row per corner):
+/// a pixel's attribute is `Σ_i w_i · (B a)_i` with the corner weights `w`, which equals
+/// `Σ_j bary_j a_j`.
+#[derive(Clone, Copy, Debug, Default)]
+struct CornerAttributes {
+    /// Camera-space vertex normals (not normalised).
+    normals: [[f32; 3]; 3],
+    /// Texel-space positions ([`Texture::texel_coords`]) for a textured albedo.
+    texel: [[f64; 2]; 3],
+    /// Vertex colours for a vertex-colour albedo.
+    color: [[f32; 3]; 3],
+}
+
+impl CornerAttributes {
+    fn new(
+        st: &ScreenTriangle,
+        mesh: &TriMesh,
+        normals: &[[f32; 3]],
+        albedo: &Albedo<'_>,
+    ) -> CornerAttributes {
+        // Indices were validated before rasterisation.
+        let t = mesh.triangles[st.triangle() as usize].map(|i| i as usize);
+        let bc = st.corner_bary();
+        let at_corners = |a: [[f32; 3]; 3]| -> [[f32; 3]; 3] {
+            std::array::from_fn(|i| {
+                std::array::from_fn(|c| {
+                    bc[i][0] * a[0][c] + bc[i][1] * a[1][c] + bc[i][2] * a[2][c]
+                })
+            })
+        };
+        let mut out = CornerAttributes {
+            normals: at_corners(t.map(|i| normals[i])),
+            ..CornerAttributes::default()
+        };
+        match albedo {
+            Albedo::Texture { texture, .. } => {
+                let uv = t.map(|i| mesh.uvs[i]);
+                out.texel = std::array::from_fn(|i| {
+                    let b = bc[i].map(f64::from);
+                    texture.texel_coords(std::array::from_fn(|c| {
+                        b[0] * uv[0][c] + b[1] * uv[1][c] + b[2] * uv[2][c]
+                    }))
+                });
+            }
+            Albedo::VertexColors => out.color = at_corners(t.map(|i| mesh.colors[i])),
+            Albedo::Constant(_) => {}
+        }
+        out
+    }
 }

@@ -261,6 +261,12 @@ impl Rasterizer {
         &self.index[y * w..(y + 1) * w]
     }
 
+    /// The set-ups of the last frame by chunk: set-up id `s` is
+    /// `setup_chunks()[s >> 16][s & 0xffff]`.
+    pub(crate) fn setup_chunks(&self) -> &[Vec<ScreenTriangle>] {
+        &self.setup_chunks
+    }
+
     /// The set-ups of the last frame, in triangle order (for coverage tests and custom passes).
     pub fn screen_triangles(&self) -> impl Iterator<Item = &ScreenTriangle> {
         self.setup_chunks.iter().flatten()
