@@ -34,6 +34,9 @@ enum Command {
     Landmarks(commands::landmarks::LandmarksArgs),
     /// Fetch or check the pinned MediaPipe model files (Apache-2.0, from npm).
     Models(commands::models::ModelsArgs),
+    /// Benchmarks against ground truth: `visage eval synthetic` (ICT-FaceKit sequences, CNN-like
+    /// depth noise, fusion vs. baselines).
+    Eval(commands::eval::EvalArgs),
 }
 
 fn main() -> ExitCode {
@@ -44,6 +47,7 @@ fn main() -> ExitCode {
         Command::Render(args) => commands::render::run(args),
         Command::Landmarks(args) => commands::landmarks::run(args),
         Command::Models(args) => commands::models::run(args),
+        Command::Eval(args) => commands::eval::run(args),
     };
     exit::report(result)
 }

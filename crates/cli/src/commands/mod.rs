@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod bench_solver;
+pub mod eval;
 pub mod fuse;
 pub mod landmarks;
 pub mod models;

@@ -1,0 +1,216 @@
+//! `visage eval synthetic`: the ground-truth benchmark (issue #5) — synthetic ICT-FaceKit
+//! sequences, CNN-like depth noise, the paper's fusion against baselines.
+//!
+//! Flags are parsed in two stages: [`SyntheticArgs`] (raw, clap) → `BenchmarkConfig`
+//! (validated by the library); `visage-eval` does the work.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context};
+use clap::{Args, Subcommand};
+use visage_eval::{
+    run_benchmark, run_sweep, table, write_results, write_sweep, BenchmarkConfig, NoiseModel,
+};
+use visage_fem::Weights;
+use visage_morphable::IctModel;
+
+/// Arguments of `visage eval`.
+#[derive(Args, Debug)]
+pub struct EvalArgs {
+    #[command(subcommand)]
+    pub command: EvalCommand,
+}
+
+/// Benchmarks.
+#[derive(Subcommand, Debug)]
+pub enum EvalCommand {
+    /// Synthetic ICT-FaceKit sequences with known ground truth: writes OUT/results.json,
+    /// results.csv, error/jitter plots (SVG) and prints a table.
+    Synthetic(SyntheticArgs),
+}
+
+/// Arguments of `visage eval synthetic`.
+#[derive(Args, Debug)]
+pub struct SyntheticArgs {
+    /// The ICT-FaceKit model: its FaceXModel folder or a checkout of the repository.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Output folder (created).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// The small setting of the test suite (1 sequence × 16 frames, 160×120, a few modes);
+    /// --sequences/--frames still override it.
+    #[arg(long)]
+    pub quick: bool,
+    /// Number of scored sequences (default 10; quick: 1).
+    #[arg(long)]
+    pub sequences: Option<usize>,
+    /// Frames per sequence (default 120; quick: 16).
+    #[arg(long)]
+    pub frames: Option<usize>,
+    /// Noise preset: none, gaussian, lowfreq, flicker, holes, edges, cnn-like.
+    #[arg(long, default_value = "cnn-like")]
+    pub noise: String,
+    /// Master seed; the same seed gives the same results.json (timings aside).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Smoothness weight λ of the fusion methods.
+    #[arg(long, default_value_t = Weights::default().lambda, allow_hyphen_values = true)]
+    pub lambda: f64,
+    /// Temporal weight μ of the fusion methods.
+    #[arg(long, default_value_t = Weights::default().mu, allow_hyphen_values = true)]
+    pub mu: f64,
+    /// Also sweep the streaming fusion over these λ values (comma-separated), with --sweep-mu;
+    /// writes OUT/sweep.json, sweep.csv, sweep_rmse.svg, sweep_jitter.svg.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub sweep_lambda: Vec<f64>,
+    /// μ values of the sweep (comma-separated).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub sweep_mu: Vec<f64>,
+    /// Write the shaded colour image of each sequence's first frame (OUT/frames/).
+    #[arg(long)]
+    pub save_frames: bool,
+}
+
+/// Runs `visage eval`.
+pub fn run(args: EvalArgs) -> anyhow::Result<()> {
+    match args.command {
+        EvalCommand::Synthetic(a) => synthetic(a),
+    }
+}
+
+fn config(args: &SyntheticArgs) -> anyhow::Result<BenchmarkConfig> {
+    let mut c = if args.quick {
+        BenchmarkConfig::quick()
+    } else {
+        BenchmarkConfig::full()
+    };
+    if let Some(n) = args.sequences {
+        c.sequences = n;
+    }
+    if let Some(f) = args.frames {
+        c.synthesis.frames = f;
+    }
+    c.noise = NoiseModel::preset(&args.noise)?;
+    c.noise_name = args.noise.clone();
+    c.seed = args.seed;
+    c.weights = Weights {
+        lambda: args.lambda,
+        mu: args.mu,
+    };
+    if args.sweep_lambda.is_empty() != args.sweep_mu.is_empty() {
+        bail!("--sweep-lambda and --sweep-mu go together");
+    }
+    c.validate()?;
+    Ok(c)
+}
+
+fn synthetic(args: SyntheticArgs) -> anyhow::Result<()> {
+    let config = config(&args)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("{}: cannot create", args.out.display()))?;
+    eprintln!("loading {}", args.model.display());
+    let model = IctModel::load_with(&args.model, &config.import)?;
+    let mut progress = |line: &str| eprintln!("{line}");
+    let results = run_benchmark(&model, &config, &mut progress)?;
+    write_results(&results, &args.out)?;
+    if args.save_frames {
+        let dir = args.out.join("frames");
+        std::fs::create_dir_all(&dir)
+            .with_context(|| format!("{}: cannot create", dir.display()))?;
+        for (s, info) in results.sequences.iter().enumerate() {
+            let seq = visage_eval::synthesize(
+                &model,
+                &visage_eval::SynthesisConfig {
+                    frames: 2,
+                    ..config.synthesis.clone()
+                },
+                info.seed,
+            )?;
+            let rgb = seq.render_color(0)?;
+            let path = dir.join(format!("seq{s:02}_frame000.png"));
+            visage_render::write_srgb_png(&path, seq.k.width, seq.k.height, &rgb)?;
+        }
+    }
+    print!("{}", table(&results));
+    println!(
+        "taubin iterations: {} (tuned on seed {})",
+        results.taubin_tuning.iterations, results.taubin_tuning.seed
+    );
+    if !args.sweep_lambda.is_empty() {
+        let points = run_sweep(
+            &model,
+            &config,
+            &args.sweep_lambda,
+            &args.sweep_mu,
+            &mut progress,
+        )?;
+        write_sweep(&points, &args.sweep_lambda, &args.sweep_mu, &args.out)?;
+        println!(
+            "{:>8} {:>8} {:>9} {:>10} {:>6}",
+            "lambda", "mu", "rmse_mm", "jitter_mm", "lag"
+        );
+        for p in &points {
+            println!(
+                "{:>8} {:>8} {:>9.3} {:>10.3} {:>6.2}",
+                p.lambda, p.mu, p.rmse_mm, p.jitter_mm, p.lag_frames
+            );
+        }
+    }
+    println!("wrote {}", args.out.join("results.json").display());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args() -> SyntheticArgs {
+        SyntheticArgs {
+            model: PathBuf::from("model"),
+            out: PathBuf::from("out"),
+            quick: true,
+            sequences: None,
+            frames: Some(20),
+            noise: "gaussian".into(),
+            seed: 3,
+            lambda: 1.0,
+            mu: 2.0,
+            sweep_lambda: Vec::new(),
+            sweep_mu: Vec::new(),
+            save_frames: false,
+        }
+    }
+
+    #[test]
+    fn flags_become_a_validated_config() {
+        let c = config(&args()).unwrap();
+        assert_eq!((c.sequences, c.synthesis.frames, c.seed), (1, 20, 3));
+        assert_eq!((c.weights.lambda, c.weights.mu), (1.0, 2.0));
+        assert_eq!(c.noise, NoiseModel::preset("gaussian").unwrap());
+
+        let bad_noise = SyntheticArgs {
+            noise: "speckle".into(),
+            ..args()
+        };
+        assert!(config(&bad_noise)
+            .unwrap_err()
+            .to_string()
+            .contains("speckle"));
+        let bad_mu = SyntheticArgs { mu: -1.0, ..args() };
+        assert!(config(&bad_mu).unwrap_err().to_string().contains("mu"));
+        let one_frame = SyntheticArgs {
+            frames: Some(1),
+            ..args()
+        };
+        assert!(config(&one_frame)
+            .unwrap_err()
+            .to_string()
+            .contains("frames"));
+        let half_sweep = SyntheticArgs {
+            sweep_lambda: vec![1.0],
+            ..args()
+        };
+        assert!(config(&half_sweep).is_err());
+    }
+}
