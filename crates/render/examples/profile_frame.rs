@@ -1,10 +1,14 @@
 //! Renders the benchmark scene of `benches/render_frame.rs` a given number of times, for
 //! instruction-count profiling (`valgrind --tool=callgrind`), which criterion's timing loop does
-//! not suit: `cargo run --release -p visage-render --example profile_frame -- 5`.
+//! not suit: `cargo run --release -p visage-render --example profile_frame -- 5` (colour frames)
+//! or `-- 5 depth` (the depth-only ground-truth path, `render_depth_with`).
 
 use visage_camera::{DepthKind, Intrinsics};
 use visage_mesh::TriMesh;
-use visage_render::{Albedo, Camera, Frame, Mat4, Renderer, Scene, Texture, Wrap};
+use visage_render::{
+    render_depth_with, Albedo, Camera, CullMode, Frame, Mat4, Rasterizer, Renderer, Scene, Texture,
+    Wrap,
+};
 
 fn face_like_mesh() -> TriMesh {
     let (nu, nv) = (124u32, 123u32);
@@ -59,6 +63,28 @@ fn main() {
         },
         ..Scene::default()
     };
+    if std::env::args().nth(2).as_deref() == Some("depth") {
+        let mut rasterizer = Rasterizer::new();
+        let start = std::time::Instant::now();
+        let mut valid = 0;
+        for _ in 0..frames {
+            let r = render_depth_with(
+                &mut rasterizer,
+                &mesh,
+                &camera,
+                &Mat4::IDENTITY,
+                DepthKind::Z,
+                CullMode::None,
+            )
+            .expect("renders");
+            valid = r.depth.valid_count();
+        }
+        eprintln!(
+            "{frames} depth frames, {:.2} ms/frame wall, {valid} pixels",
+            start.elapsed().as_secs_f64() * 1e3 / frames as f64
+        );
+        return;
+    }
     let mut renderer = Renderer::new();
     let mut images = Frame::color_and_depth(k.width, k.height, DepthKind::Z);
     let start = std::time::Instant::now();
