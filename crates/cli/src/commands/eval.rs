@@ -70,6 +70,15 @@ pub struct SyntheticArgs {
     /// Write the shaded colour image of each sequence's first frame (OUT/frames/).
     #[arg(long)]
     pub save_frames: bool,
+    /// Largest head yaw, degrees (default 25; 0 with the two below: a still head).
+    #[arg(long)]
+    pub max_yaw: Option<f64>,
+    /// Largest head pitch, degrees (default 10).
+    #[arg(long)]
+    pub max_pitch: Option<f64>,
+    /// Largest head translation per axis, metres (default 0.03).
+    #[arg(long)]
+    pub max_translation: Option<f64>,
 }
 
 /// Runs `visage eval`.
@@ -90,6 +99,15 @@ fn config(args: &SyntheticArgs) -> anyhow::Result<BenchmarkConfig> {
     }
     if let Some(f) = args.frames {
         c.synthesis.frames = f;
+    }
+    if let Some(v) = args.max_yaw {
+        c.synthesis.max_yaw_deg = v;
+    }
+    if let Some(v) = args.max_pitch {
+        c.synthesis.max_pitch_deg = v;
+    }
+    if let Some(v) = args.max_translation {
+        c.synthesis.max_translation_m = v;
     }
     c.noise = NoiseModel::preset(&args.noise)?;
     c.noise_name = args.noise.clone();
@@ -179,6 +197,9 @@ mod tests {
             sweep_lambda: Vec::new(),
             sweep_mu: Vec::new(),
             save_frames: false,
+            max_yaw: Some(0.0),
+            max_pitch: None,
+            max_translation: None,
         }
     }
 
@@ -188,6 +209,18 @@ mod tests {
         assert_eq!((c.sequences, c.synthesis.frames, c.seed), (1, 20, 3));
         assert_eq!((c.weights.lambda, c.weights.mu), (1.0, 2.0));
         assert_eq!(c.noise, NoiseModel::preset("gaussian").unwrap());
+        assert_eq!(
+            (c.synthesis.max_yaw_deg, c.synthesis.max_pitch_deg),
+            (0.0, 10.0)
+        );
+        let bad_yaw = SyntheticArgs {
+            max_yaw: Some(f64::NAN),
+            ..args()
+        };
+        assert!(config(&bad_yaw)
+            .unwrap_err()
+            .to_string()
+            .contains("max-yaw"));
 
         let bad_noise = SyntheticArgs {
             noise: "speckle".into(),
