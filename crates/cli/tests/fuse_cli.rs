@@ -1,7 +1,11 @@
 //! `visage fuse` driven as a user would: the real binary on generated depth sequences.
 
+mod common;
+
+use common::{s, visage};
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -41,17 +45,6 @@ fn write_sequence(dir: &Path, frames: usize, empty_frame: Option<usize>) {
         }
         write_depth_png(&dir.join(format!("depth_{f:03}.png")), &d, 1000.0).unwrap();
     }
-}
-
-fn visage(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_visage"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 /// RMS distance along the line of sight between mesh vertices and the noise-free surface (m).

@@ -2,8 +2,11 @@
 //! and the depth maps it writes fused by `visage fuse`. Needs the model files (run
 //! `scripts/setup.sh`) and `../shared`; skipped visibly without them.
 
+mod common;
+
+use common::{s, visage};
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -31,17 +34,6 @@ fn portrait() -> Option<PathBuf> {
         println!("SKIPPED: ../shared not found");
         None
     }
-}
-
-fn visage(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_visage"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 #[test]

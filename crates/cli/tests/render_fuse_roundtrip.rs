@@ -1,8 +1,9 @@
 //! `visage render --depth-out` composes with `visage fuse --depth`: a rendered sphere is fused
 //! back onto the sphere, in both depth conventions.
 
-use std::path::Path;
-use std::process::Command;
+mod common;
+
+use common::{run_ok, s};
 
 use visage_camera::Intrinsics;
 use visage_mesh::io::{read_ply, write_obj};
@@ -38,22 +39,6 @@ fn sphere() -> TriMesh {
     TriMesh::new(vertices, triangles)
 }
 
-fn run(args: &[&str]) {
-    let o = Command::new(env!("CARGO_BIN_EXE_visage"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
 #[test]
 fn rendered_depth_fuses_back_onto_the_sphere() {
     let tmp = tempfile::tempdir().unwrap();
@@ -69,7 +54,7 @@ fn rendered_depth_fuses_back_onto_the_sphere() {
         std::fs::create_dir_all(&depth).unwrap();
         for f in 0..3 {
             let png = depth.join(format!("{f:03}.png"));
-            run(&[
+            run_ok(&[
                 "render",
                 s(&mesh),
                 "--intrinsics",
@@ -81,7 +66,7 @@ fn rendered_depth_fuses_back_onto_the_sphere() {
             ]);
         }
         let out = tmp.path().join(format!("fused_{kind}"));
-        run(&[
+        run_ok(&[
             "fuse",
             "--depth",
             s(&depth),
