@@ -18,7 +18,7 @@
 //!   motion are kept in the image plane) and carry the fitted metric depth; this is the mesh
 //!   that [`crate::face_depth`] rasterises.
 
-use visage_camera::Intrinsics;
+use visage_camera::{Intrinsics, RigidTransform};
 
 use crate::{CanonicalMesh, FaceError, NUM_LANDMARKS};
 
@@ -28,24 +28,8 @@ pub const REFINE_ITERATIONS: usize = 15;
 /// degenerate: no face can be fitted.
 pub const MIN_LANDMARK_SPREAD_PX: f64 = 1.0;
 
-/// A rigid pose `X_cam = R · X + t`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FacePose {
-    /// Rotation, row-major.
-    pub rotation: [[f64; 3]; 3],
-    /// Translation, metres.
-    pub translation: [f64; 3],
-}
-
-impl FacePose {
-    /// `R · x + t`.
-    pub fn apply(&self, x: [f64; 3]) -> [f64; 3] {
-        let r = &self.rotation;
-        std::array::from_fn(|i| {
-            r[i][0] * x[0] + r[i][1] * x[1] + r[i][2] * x[2] + self.translation[i]
-        })
-    }
-}
+/// A rigid head pose `X_cam = R · X_canonical + t`.
+pub type FacePose = RigidTransform;
 
 /// The metric fit of one face.
 #[derive(Clone, Debug, PartialEq)]

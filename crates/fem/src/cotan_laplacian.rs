@@ -3,10 +3,13 @@
 use faer::sparse::Triplet;
 
 use crate::sparse::{from_triplets, SparseMatrix};
-use crate::triangle::areas;
+use crate::triangle::{areas, dot, sub};
 use crate::FemError;
 
-/// Stiffness matrix `L_ij = ∫_Ω ∇φ_i · ∇φ_j dx` of P1 elements on a planar mesh.
+/// Stiffness matrix `L_ij = ∫_Ω ∇φ_i · ∇φ_j dx` of P1 elements on a planar (`D = 2`) mesh, or
+/// the Laplace–Beltrami stiffness of a triangulated surface (`D = 3`, the same cotangent
+/// formula with the 3-D angles; used by the face-anchored mesh, whose domain is the canonical
+/// face surface).
 ///
 /// #V × #V, symmetric **positive** semi-definite (the sign opposite to libigl's `cotmatrix`):
 /// `L_ij = −½ (cot α_ij + cot β_ij)` for an edge ij with opposite angles α, β, and the diagonal
@@ -14,8 +17,8 @@ use crate::FemError;
 /// connected mesh. `(L f)_i = 0` at interior vertices for linear `f`; at boundary vertices
 /// `L f` is the boundary flux (the natural, Neumann condition of (2.6)–(2.7)).
 /// Invariant under scaling of the domain (cotangents are scale-free).
-pub fn cotan_laplacian(
-    points: &[[f64; 2]],
+pub fn cotan_laplacian<const D: usize>(
+    points: &[[f64; D]],
     triangles: &[[u32; 3]],
 ) -> Result<SparseMatrix, FemError> {
     let areas = areas(points, triangles)?;
@@ -24,12 +27,9 @@ pub fn cotan_laplacian(
         for k in 0..3 {
             let (i, j) = (t[(k + 1) % 3] as usize, t[(k + 2) % 3] as usize);
             let (pk, pi, pj) = (points[t[k] as usize], points[i], points[j]);
-            let (ei, ej) = (
-                [pi[0] - pk[0], pi[1] - pk[1]],
-                [pj[0] - pk[0], pj[1] - pk[1]],
-            );
+            let (ei, ej) = (sub(pi, pk), sub(pj, pk));
             // cot of the angle at k = (ei · ej) / |ei × ej|, |ei × ej| = 2·area
-            let half_cot = 0.5 * (ei[0] * ej[0] + ei[1] * ej[1]) / (2.0 * area);
+            let half_cot = 0.5 * dot(&ei, &ej) / (2.0 * area);
             triplets.push(Triplet::new(i, j, -half_cot));
             triplets.push(Triplet::new(j, i, -half_cot));
             triplets.push(Triplet::new(i, i, half_cot));

@@ -6,12 +6,16 @@ use crate::sparse::{from_triplets, SparseMatrix};
 use crate::triangle::areas;
 use crate::FemError;
 
-/// Consistent mass matrix `M_ij = ∫_Ω φ_i φ_j dx` of P1 elements on a planar mesh.
+/// Consistent mass matrix `M_ij = ∫_Ω φ_i φ_j dx` of P1 elements on a planar
+/// (`D = 2`) or surface (`D = 3`) mesh.
 ///
 /// #V × #V, symmetric positive definite; per triangle of area `A`, `A/6` on the diagonal and
 /// `A/12` off it, so the entries sum to the area of Ω. `points` are domain coordinates
 /// (see [`crate::domain`]); `triangles` index them.
-pub fn mass_matrix(points: &[[f64; 2]], triangles: &[[u32; 3]]) -> Result<SparseMatrix, FemError> {
+pub fn mass_matrix<const D: usize>(
+    points: &[[f64; D]],
+    triangles: &[[u32; 3]],
+) -> Result<SparseMatrix, FemError> {
     let areas = areas(points, triangles)?;
     let mut triplets = Vec::with_capacity(9 * triangles.len());
     for (t, &area) in triangles.iter().zip(&areas) {
@@ -27,7 +31,10 @@ pub fn mass_matrix(points: &[[f64; 2]], triangles: &[[u32; 3]]) -> Result<Sparse
 
 /// Lumped (row-sum) mass `M_l,ii = Σ_j M_ij = ∫_Ω φ_i dx`: a third of the area of the
 /// triangles around vertex i. Errors on a vertex that belongs to no triangle.
-pub fn lumped_mass(points: &[[f64; 2]], triangles: &[[u32; 3]]) -> Result<Vec<f64>, FemError> {
+pub fn lumped_mass<const D: usize>(
+    points: &[[f64; D]],
+    triangles: &[[u32; 3]],
+) -> Result<Vec<f64>, FemError> {
     let areas = areas(points, triangles)?;
     let mut m = vec![0.0; points.len()];
     for (t, &area) in triangles.iter().zip(&areas) {

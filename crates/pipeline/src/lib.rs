@@ -2,16 +2,22 @@
 //! metrics out. The stages live in the library crates (`visage-camera`, `visage-mesh`,
 //! `visage-fem`); this crate fixes the per-sequence set-up and drives the per-frame loop.
 
+mod anchored_fuser;
 mod atomic_write;
 mod depth_sequence;
 mod error;
+mod face_domain;
 mod fuse;
 mod fusion_setup;
 mod report;
 
+pub use anchored_fuser::{
+    AnchoredFrame, AnchoredFuser, AnchoredResult, FrameDepth, DOMAIN_UNITS_PER_METRE,
+};
 pub use atomic_write::write_atomically;
 pub use depth_sequence::{DepthSequence, SequenceSurvey, DOMAIN_MAJORITY};
 pub use error::PipelineError;
+pub use face_domain::{Anchor, FaceDomain, MAX_SUBDIVISION};
 pub use fuse::{
     fuse_sequence, to_positions, FrameResult, FuseOptions, Fuser, Mode, DEFAULT_MAX_DEPTH_M,
 };

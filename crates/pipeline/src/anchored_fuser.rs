@@ -1,0 +1,374 @@
+//! Face-anchored fusion with a pose-compensated temporal term (issue #6).
+//!
+//! The paper's mesh is fixed on the image plane and its temporal term `μ‖S_k − S_{k−1}‖²_M`
+//! pulls the surface towards where the face *was*. Here every vertex is a fixed point of the
+//! face ([`FaceDomain`]), and the temporal term follows the head:
+//!
+//! ```text
+//! E(S_k) = ‖S_k − X_k‖²_M + λ (S_k − P_k)ᵀ K (S_k − P_k) + μ ‖S_k − T_k T_{k−1}⁻¹ S_{k−1}‖²_M
+//! ```
+//!
+//! with `X_k` the raw surface sampled at the vertices (data term of Eq. 2.3), `T_k` the rigid
+//! head pose of frame k (head → camera, from the metric face fit), `P_k = T_k C` the template
+//! `C` placed by the pose, `M` the consistent mass and `K = Lᵀ M_l⁻¹ L` the biharmonic
+//! stiffness (Eq. 2.4, ERRATA 3) of the template surface.
+//!
+//! **The matrix does not depend on the pose.** M and K act on each coordinate column
+//! separately, so for a rigid motion `T x = R x + t` applied to every vertex
+//! (`T S = S Rᵀ + 1 tᵀ`): `‖T A − T B‖²_M = tr(R (A−B)ᵀ M (A−B) Rᵀ) = ‖A − B‖²_M`, and
+//! `K (T A − T B) = K (A − B) Rᵀ` so the smoothness term is invariant too. Writing every frame
+//! in head coordinates, `S̃_k = T_k⁻¹ S_k`, `X̃_k = T_k⁻¹ X_k`, the energy becomes
+//!
+//! ```text
+//! E = ‖S̃_k − X̃_k‖²_M + λ (S̃_k − C)ᵀ K (S̃_k − C) + μ ‖S̃_k − S̃_{k−1}‖²_M ,
+//! ```
+//!
+//! the paper's energy with a data mass `M` (ERRATA's `((1+μ)M + λK) s = …`) and a template
+//! prior: the streaming step solves `((1+μ)M + λK) S̃_k = M X̃_k + λ K C + μ M S̃_{k−1}` with the
+//! matrix factored once per clip, and `S_k = T_k S̃_k`. Only the right-hand side moves with
+//! the head; the clip mode is [`visage_fem::solve_clip`] on the same head-coordinate
+//! right-hand sides.
+//!
+//! **Why the template prior** (`S − P` rather than `S` in the smoothness term): on a curved
+//! face, `ΔS` of the face itself is its mean-curvature normal, so `λ‖ΔS‖²` flattens the nose
+//! and shrinks the outline; smoothing the deviation from the posed template removes noise and
+//! keeps the face's shape. Constants are in K's null space, so `K P_k = K C Rᵀ`: the prior's
+//! right-hand side is computed once.
+//!
+//! **Units.** The finite-element domain is the template surface in millimetres (the
+//! canonical FaceMesh is an average adult face), so λ is in mm⁴: smoothing length ≈ λ^{1/4} mm.
+//! Vertex fields are metres.
+
+use std::time::Instant;
+
+use faer::Mat;
+use visage_camera::{DepthMap, Intrinsics, RigidTransform};
+use visage_fem::{
+    biharmonic, cotan_laplacian, lumped_mass, mass_matrix, FusionSystem, Operators,
+    StreamingSolver, SurfaceMetrics, SurfaceQuality, Weights,
+};
+
+use crate::{FaceDomain, FrameStatus, PipelineError};
+
+/// Template coordinates (metres) → finite-element domain coordinates (millimetres).
+pub const DOMAIN_UNITS_PER_METRE: f64 = 1000.0;
+
+/// Where a frame's raw surface comes from.
+#[derive(Clone, Copy, Debug)]
+pub enum FrameDepth<'a> {
+    /// A triangulated surface with one camera-space point (metres) per template vertex that
+    /// projects onto that vertex's landmark — the face CNN's metric landmarks. A vertex's raw
+    /// point is where its pixel's ray meets its template triangle (perspective-correct
+    /// interpolation): exactly what rasterising the surface and sampling the depth map at the
+    /// vertex's pixel gives, without rasterising.
+    Surface(&'a [[f64; 3]]),
+    /// A depth map (z or ray distance, metres; `0`/NaN = none), sampled bilinearly at the
+    /// vertex's pixel: an RGB-D sensor, a depth network, or the benchmark's noisy depth.
+    Map(&'a DepthMap),
+}
+
+/// One frame's input.
+#[derive(Clone, Copy, Debug)]
+pub struct AnchoredFrame<'a> {
+    /// Pixel position of every template vertex (e.g. the 468 tracked landmarks).
+    pub landmarks_px: &'a [[f64; 2]],
+    /// Head pose `T_k`: template (head) coordinates → camera coordinates.
+    pub pose: RigidTransform,
+    pub depth: FrameDepth<'a>,
+}
+
+/// What [`AnchoredFuser::process`] did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnchoredResult {
+    pub status: FrameStatus,
+    /// Fraction of the vertices with a valid raw sample.
+    pub valid_fraction: f64,
+    pub rhs_seconds: f64,
+    pub solve_seconds: f64,
+    pub relative_residual: f64,
+}
+
+/// Streaming face-anchored fusion: the fixed mesh, its factored system and per-frame buffers
+/// (allocated once; [`AnchoredFuser::process`] allocates nothing).
+pub struct AnchoredFuser {
+    domain: FaceDomain,
+    k: Intrinsics,
+    max_depth: f64,
+    solver: StreamingSolver,
+    metrics: SurfaceMetrics,
+    /// Template positions at the vertices, head coordinates, metres (`C`).
+    rest: Mat<f64>,
+    /// `λ K C`.
+    prior_rhs: Mat<f64>,
+    pixels: Vec<[f64; 2]>,
+    raw: Vec<[f64; 3]>,
+    valid: Vec<bool>,
+    /// Data in head coordinates, holes filled (`X̃_k`).
+    data: Mat<f64>,
+    b: Mat<f64>,
+    x_head: Mat<f64>,
+    solution: Vec<[f64; 3]>,
+    pose: RigidTransform,
+}
+
+impl AnchoredFuser {
+    /// Builds the operators on the template surface (`template` = head-coordinate positions of
+    /// the template vertices, metres) and factors the frame matrices once.
+    pub fn new(
+        domain: FaceDomain,
+        template: &[[f64; 3]],
+        k: Intrinsics,
+        weights: Weights,
+        max_depth: f64,
+    ) -> Result<AnchoredFuser, PipelineError> {
+        if template.len() != domain.template_vertex_count {
+            return Err(PipelineError::InvalidOption {
+                name: "template",
+                value: format!("{} vertices", template.len()),
+                reason: "must match the face domain's template",
+            });
+        }
+        k.validate()?;
+        let n = domain.vertex_count();
+        let mut rest = vec![[0.0; 3]; n];
+        domain.interpolate(template, &mut rest);
+        let points: Vec<[f64; 3]> = rest
+            .iter()
+            .map(|p| p.map(|c| c * DOMAIN_UNITS_PER_METRE))
+            .collect();
+        let l = cotan_laplacian(&points, &domain.triangles)?;
+        let m_lumped = lumped_mass(&points, &domain.triangles)?;
+        let mass = mass_matrix(&points, &domain.triangles)?;
+        let ops = Operators {
+            data_mass: mass.clone(),
+            mass,
+            biharmonic: biharmonic(&l, &m_lumped)?,
+        };
+        let rest = Mat::from_fn(n, 3, |i, c| rest[i][c]);
+        let mut prior_rhs = Mat::zeros(n, 3);
+        visage_fem::sparse::sym_matmul(
+            &ops.biharmonic,
+            rest.as_ref(),
+            weights.lambda,
+            0.0,
+            prior_rhs.as_mut(),
+        );
+        let system = FusionSystem::new(ops, weights)?;
+        Ok(AnchoredFuser {
+            metrics: SurfaceMetrics::new(n, &domain.triangles, &domain.boundary),
+            domain,
+            k,
+            max_depth,
+            solver: StreamingSolver::new(system),
+            rest,
+            prior_rhs,
+            pixels: vec![[0.0; 2]; n],
+            raw: vec![[0.0; 3]; n],
+            valid: vec![false; n],
+            data: Mat::zeros(n, 3),
+            b: Mat::zeros(n, 3),
+            x_head: Mat::zeros(n, 3),
+            solution: vec![[0.0; 3]; n],
+            pose: RigidTransform::IDENTITY,
+        })
+    }
+
+    pub fn domain(&self) -> &FaceDomain {
+        &self.domain
+    }
+
+    pub fn intrinsics(&self) -> &Intrinsics {
+        &self.k
+    }
+
+    pub fn solver(&self) -> &StreamingSolver {
+        &self.solver
+    }
+
+    pub fn solver_mut(&mut self) -> &mut StreamingSolver {
+        &mut self.solver
+    }
+
+    /// Forgets the history (lost track, shot cut; ERRATA 18): the next frame has no temporal
+    /// term.
+    pub fn reset(&mut self) {
+        self.solver.reset();
+    }
+
+    /// The last fused surface, camera coordinates, metres (#V).
+    pub fn solution(&self) -> &[[f64; 3]] {
+        &self.solution
+    }
+
+    /// The last raw surface at the vertices, camera coordinates; holes hold what the solver
+    /// used instead (see [`AnchoredFuser::valid`]).
+    pub fn raw(&self) -> &[[f64; 3]] {
+        &self.raw
+    }
+
+    /// Per vertex: whether the last frame had a raw sample there.
+    pub fn valid(&self) -> &[bool] {
+        &self.valid
+    }
+
+    /// The last frame's vertex pixel positions.
+    pub fn pixels(&self) -> &[[f64; 2]] {
+        &self.pixels
+    }
+
+    /// The last frame's head pose.
+    pub fn pose(&self) -> &RigidTransform {
+        &self.pose
+    }
+
+    /// The last data right-hand side, head coordinates (`M X̃_k + λ K C`): the clip solver's
+    /// input.
+    pub fn rhs(&self) -> &Mat<f64> {
+        &self.b
+    }
+
+    /// The last solution in head coordinates (`S̃_k`).
+    pub fn solution_head(&self) -> &Mat<f64> {
+        &self.x_head
+    }
+
+    /// Fuses one frame.
+    ///
+    /// # Errors
+    /// When the frame's landmarks or surface do not have one entry per template vertex, or
+    /// the pose is not finite.
+    pub fn process(&mut self, frame: &AnchoredFrame<'_>) -> Result<AnchoredResult, PipelineError> {
+        let start = Instant::now();
+        let m = self.domain.template_vertex_count;
+        let wrong = |what: &'static str, found: usize| PipelineError::InvalidOption {
+            name: what,
+            value: format!("{found} entries"),
+            reason: "needs one per template vertex",
+        };
+        if frame.landmarks_px.len() != m {
+            return Err(wrong("landmarks", frame.landmarks_px.len()));
+        }
+        if let FrameDepth::Surface(s) = frame.depth {
+            if s.len() != m {
+                return Err(wrong("surface", s.len()));
+            }
+        }
+        if !frame.pose.is_finite() {
+            return Err(PipelineError::InvalidOption {
+                name: "pose",
+                value: format!("{:?}", frame.pose),
+                reason: "must be finite",
+            });
+        }
+        self.pose = frame.pose;
+        self.domain
+            .interpolate(frame.landmarks_px, &mut self.pixels);
+        let mut valid_count = 0usize;
+        for i in 0..self.domain.vertex_count() {
+            let sample = match frame.depth {
+                FrameDepth::Surface(points) => self.surface_sample(i, points),
+                FrameDepth::Map(depth) => {
+                    let [u, v] = self.pixels[i];
+                    depth
+                        .sample_ray_distance(&self.k, u, v)
+                        .filter(|&d| d > 0.0 && d <= self.max_depth)
+                        .map(|d| self.k.backproject(u, v, d))
+                }
+            };
+            self.valid[i] = sample.is_some();
+            let head = match sample {
+                Some(x) => {
+                    valid_count += 1;
+                    self.raw[i] = x;
+                    frame.pose.apply_inverse(x)
+                }
+                // A hole: the previous surface where the head is now, else the template.
+                None => {
+                    let fill = match self.solver.previous() {
+                        Some(prev) => [prev[(i, 0)], prev[(i, 1)], prev[(i, 2)]],
+                        None => [self.rest[(i, 0)], self.rest[(i, 1)], self.rest[(i, 2)]],
+                    };
+                    self.raw[i] = frame.pose.apply(fill);
+                    fill
+                }
+            };
+            for c in 0..3 {
+                self.data[(i, c)] = head[c];
+            }
+        }
+        let n = self.domain.vertex_count();
+        let mut result = AnchoredResult {
+            status: FrameStatus::Solved,
+            valid_fraction: valid_count as f64 / n as f64,
+            rhs_seconds: 0.0,
+            solve_seconds: 0.0,
+            relative_residual: 0.0,
+        };
+        if valid_count == 0 {
+            let Some(prev) = self.solver.previous() else {
+                result.status = FrameStatus::NoData;
+                return Ok(result);
+            };
+            self.x_head.copy_from(prev);
+            self.write_solution();
+            result.status = FrameStatus::Carried;
+            return Ok(result);
+        }
+        self.b.copy_from(&self.prior_rhs);
+        self.solver
+            .system()
+            .apply_mass(self.data.as_ref(), 1.0, 1.0, self.b.as_mut());
+        result.rhs_seconds = start.elapsed().as_secs_f64();
+        let solve = Instant::now();
+        let report = self.solver.step(self.b.as_ref(), self.x_head.as_mut());
+        result.solve_seconds = solve.elapsed().as_secs_f64();
+        result.relative_residual = report.relative_residual;
+        self.write_solution();
+        Ok(result)
+    }
+
+    /// Replaces the current solution (head coordinates) — the clip solver's result for the
+    /// frame whose pose is `pose` — and maps it to camera coordinates.
+    pub fn set_solution_head(&mut self, x_head: &Mat<f64>, pose: RigidTransform) {
+        self.x_head.copy_from(x_head);
+        self.pose = pose;
+        self.write_solution();
+    }
+
+    /// Mean |H| and roughness (ERRATA 13) of the last raw surface and of the last solution.
+    pub fn frame_quality(&mut self) -> (SurfaceQuality, SurfaceQuality) {
+        (
+            self.metrics.evaluate(&self.raw),
+            self.metrics.evaluate(&self.solution),
+        )
+    }
+
+    fn write_solution(&mut self) {
+        for (i, s) in self.solution.iter_mut().enumerate() {
+            *s = self.pose.apply([
+                self.x_head[(i, 0)],
+                self.x_head[(i, 1)],
+                self.x_head[(i, 2)],
+            ]);
+        }
+    }
+
+    /// The point of the surface `points` seen at vertex i's pixel: on the plane of its
+    /// template triangle, perspective-correct barycentrics `β_j ∝ b_j / z_j`.
+    fn surface_sample(&self, i: usize, points: &[[f64; 3]]) -> Option<[f64; 3]> {
+        let a = self.domain.anchors[i];
+        let t = self.domain.template_triangles[a.triangle as usize];
+        let corners = t.map(|j| points[j as usize]);
+        if corners
+            .iter()
+            .any(|p| !(p[2] > 0.0 && p.iter().all(|c| c.is_finite())))
+        {
+            return None;
+        }
+        let w: [f64; 3] = std::array::from_fn(|j| a.bary[j] / corners[j][2]);
+        let sum: f64 = w.iter().sum();
+        let x: [f64; 3] =
+            std::array::from_fn(|c| (0..3).map(|j| w[j] * corners[j][c]).sum::<f64>() / sum);
+        (x[2] <= self.max_depth).then_some(x)
+    }
+}
