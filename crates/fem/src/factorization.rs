@@ -7,6 +7,7 @@ use faer::sparse::linalg::cholesky::{
     SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
 use faer::perm::PermRef;
@@ -14,6 +15,9 @@ use faer::{Conj, MatMut, Par, Side};
 
 use crate::sparse::SparseMatrix;
 use crate::FemError;
+
+/// Numeric factorisations computed by this process (see [`Factorization::numeric_count`]).
+static NUMERIC_FACTORIZATIONS: AtomicUsize = AtomicUsize::new(0);
 
 /// Which sparse Cholesky kernel to use.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -128,7 +132,14 @@ impl Factorization {
         Self::numeric(Arc::clone(&self.symbolic), a)
     }
 
+    /// Number of numeric factorisations this process has computed so far: lets a test or a
+    /// benchmark check that a clip is factored once and each frame only solves.
+    pub fn numeric_count() -> usize {
+        NUMERIC_FACTORIZATIONS.load(Ordering::Relaxed)
+    }
+
     fn numeric(symbolic: Arc<SymbolicCholesky<usize>>, a: &SparseMatrix) -> Result<Self, FemError> {
+        NUMERIC_FACTORIZATIONS.fetch_add(1, Ordering::Relaxed);
         let n = a.nrows();
         if symbolic.nrows() != n {
             return Err(FemError::Dimension {

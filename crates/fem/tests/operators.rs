@@ -202,3 +202,44 @@ fn degenerate_triangles_are_reported_with_their_index() {
         .to_string();
     assert!(err.contains("triangle 1"), "{err}");
 }
+
+/// On a surface in 3-D (the face-anchored mesh's domain) the operators are intrinsic: a planar
+/// mesh rotated out of its plane gives the same M, M_l and L as in 2-D.
+#[test]
+fn surface_operators_are_intrinsic() {
+    for (name, mesh) in corpus() {
+        let (a, b) = (0.7f64, -0.4f64);
+        let lifted: Vec<[f64; 3]> = mesh
+            .points
+            .iter()
+            .map(|p| {
+                // Rotate (x, y, 0) about the x axis by a, then about the z axis by b, and shift.
+                let (y, z) = (p[1] * a.cos(), p[1] * a.sin());
+                let (x, y) = (p[0] * b.cos() - y * b.sin(), p[0] * b.sin() + y * b.cos());
+                [x + 3.0, y - 1.0, z + 2.0]
+            })
+            .collect();
+        let pairs = [
+            (
+                mass_matrix(&mesh.points, &mesh.triangles).unwrap(),
+                mass_matrix(&lifted, &mesh.triangles).unwrap(),
+            ),
+            (
+                cotan_laplacian(&mesh.points, &mesh.triangles).unwrap(),
+                cotan_laplacian(&lifted, &mesh.triangles).unwrap(),
+            ),
+        ];
+        for (flat, surface) in &pairs {
+            let mut worst = 0.0f64;
+            for_each_entry(flat, |i, j, v| {
+                worst = worst.max((v - entry(surface, i, j)).abs() / v.abs().max(1.0));
+            });
+            assert!(worst < 1e-9, "{name}: {worst}");
+        }
+        let ml = lumped_mass(&mesh.points, &mesh.triangles).unwrap();
+        let ml3 = lumped_mass(&lifted, &mesh.triangles).unwrap();
+        for (p, q) in ml.iter().zip(&ml3) {
+            assert!((p - q).abs() < 1e-9 * p);
+        }
+    }
+}
