@@ -292,8 +292,8 @@ impl AnchoredFuser {
                     fill
                 }
             };
-            for c in 0..3 {
-                self.data[(i, c)] = head[c];
+            for (c, value) in head.into_iter().enumerate() {
+                self.data[(i, c)] = value;
             }
         }
         let n = self.domain.vertex_count();
