@@ -151,10 +151,10 @@ fn noise_is_reduced_on_a_moving_head() {
         .unwrap();
         f.domain().interpolate(&clean, &mut truth);
         if k >= 5 {
-            for i in 0..truth.len() {
+            for ((r, s), g) in f.raw().iter().zip(f.solution()).zip(&truth) {
                 for c in 0..3 {
-                    raw_err += (f.raw()[i][c] - truth[i][c]).powi(2);
-                    fused_err += (f.solution()[i][c] - truth[i][c]).powi(2);
+                    raw_err += (r[c] - g[c]).powi(2);
+                    fused_err += (s[c] - g[c]).powi(2);
                 }
             }
             count += truth.len();
