@@ -22,70 +22,115 @@ pub fn depthwise_conv2d<M: Madd>(
     assert_eq!(y.len(), win.out_h * win.out_w * c, "depthwise output size");
     assert_eq!(w.len(), win.k_h * win.k_w * c, "depthwise kernel size");
     assert_eq!(b.len(), c, "depthwise bias size");
+    // Output columns whose 3×3 window lies inside the input: `interior_row3` handles them with
+    // the kernel held in registers; the other pixels go through `pixel`.
+    let (ox_lo, ox_hi) = if win.k_h == 3 && win.k_w == 3 {
+        let lo = win.pad_left.div_ceil(win.stride_w);
+        let hi = (win.in_w + win.pad_left)
+            .checked_sub(3)
+            .map_or(0, |last| last / win.stride_w + 1)
+            .min(win.out_w);
+        (lo.min(hi), hi)
+    } else {
+        (0, 0)
+    };
     for oy in 0..win.out_h {
         // Valid taps of this row: ky with 0 ≤ oy·s + ky − pad < in_h.
         let (ky0, ky1) = valid_taps(oy, win.stride_h, win.pad_top, win.k_h, win.in_h);
-        for ox in 0..win.out_w {
-            let (kx0, kx1) = valid_taps(ox, win.stride_w, win.pad_left, win.k_w, win.in_w);
-            let out = &mut y[(oy * win.out_w + ox) * c..][..c];
-            let base_y = oy * win.stride_h + ky0 - win.pad_top;
-            let base_x = ox * win.stride_w + kx0 - win.pad_left;
+        let full_rows = win.k_h == 3 && ky0 == 0 && ky1 == 3;
+        let (lo, hi) = if full_rows { (ox_lo, ox_hi) } else { (0, 0) };
+        for ox in (0..lo).chain(hi.max(lo)..win.out_w) {
+            pixel::<M>(x, win, c, w, b, oy, ox, (ky0, ky1), y);
+        }
+        if hi > lo {
+            let iy0 = oy * win.stride_h - win.pad_top;
             let mut cb = 0;
-            if win.k_h == 3 && win.k_w == 3 && ky1 - ky0 == 3 && kx1 - kx0 == 3 {
-                // Interior pixel of a 3×3 window: fixed trip counts, fully unrolled.
-                let (xb, wb) = ((base_y * win.in_w + base_x) * c, 0);
-                while cb + 16 <= c {
-                    full3::<M, 16>(x, w, b, win.in_w, c, cb, xb, wb, out);
-                    cb += 16;
-                }
-                while cb + 4 <= c {
-                    full3::<M, 4>(x, w, b, win.in_w, c, cb, xb, wb, out);
-                    cb += 4;
-                }
-            }
-            while cb + 16 <= c {
-                tap_block::<M, 16>(
-                    x,
-                    w,
-                    b,
-                    win,
-                    c,
-                    cb,
-                    (ky0, ky1, kx0, kx1),
-                    (base_y, base_x),
-                    out,
-                );
-                cb += 16;
+            while cb + 8 <= c {
+                interior_row3::<M, 8>(x, w, b, win, c, cb, iy0, (lo, hi), oy, y);
+                cb += 8;
             }
             while cb + 4 <= c {
-                tap_block::<M, 4>(
-                    x,
-                    w,
-                    b,
-                    win,
-                    c,
-                    cb,
-                    (ky0, ky1, kx0, kx1),
-                    (base_y, base_x),
-                    out,
-                );
+                interior_row3::<M, 4>(x, w, b, win, c, cb, iy0, (lo, hi), oy, y);
                 cb += 4;
             }
             while cb < c {
-                tap_block::<M, 1>(
-                    x,
-                    w,
-                    b,
-                    win,
-                    c,
-                    cb,
-                    (ky0, ky1, kx0, kx1),
-                    (base_y, base_x),
-                    out,
-                );
+                interior_row3::<M, 1>(x, w, b, win, c, cb, iy0, (lo, hi), oy, y);
                 cb += 1;
             }
         }
+    }
+}
+
+/// One output pixel, any window, taps clipped to the input.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn pixel<M: Madd>(
+    x: &[f32],
+    win: &Window,
+    c: usize,
+    w: &[f32],
+    b: &[f32],
+    oy: usize,
+    ox: usize,
+    (ky0, ky1): (usize, usize),
+    y: &mut [f32],
+) {
+    let (kx0, kx1) = valid_taps(ox, win.stride_w, win.pad_left, win.k_w, win.in_w);
+    let out = &mut y[(oy * win.out_w + ox) * c..][..c];
+    let base_y = oy * win.stride_h + ky0 - win.pad_top;
+    let base_x = ox * win.stride_w + kx0 - win.pad_left;
+    let taps = (ky0, ky1, kx0, kx1);
+    let mut cb = 0;
+    while cb + 16 <= c {
+        tap_block::<M, 16>(x, w, b, win, c, cb, taps, (base_y, base_x), out);
+        cb += 16;
+    }
+    while cb + 4 <= c {
+        tap_block::<M, 4>(x, w, b, win, c, cb, taps, (base_y, base_x), out);
+        cb += 4;
+    }
+    while cb < c {
+        tap_block::<M, 1>(x, w, b, win, c, cb, taps, (base_y, base_x), out);
+        cb += 1;
+    }
+}
+
+/// Channels `cb .. cb + NB` of output columns `lo .. hi` of row `oy`, every 3×3 tap inside the
+/// input (top-left input row `iy0`): the nine weight vectors and the bias stay in registers
+/// while the row is swept.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn interior_row3<M: Madd, const NB: usize>(
+    x: &[f32],
+    w: &[f32],
+    b: &[f32],
+    win: &Window,
+    c: usize,
+    cb: usize,
+    iy0: usize,
+    (lo, hi): (usize, usize),
+    oy: usize,
+    y: &mut [f32],
+) {
+    let wk: [[f32; NB]; 9] = std::array::from_fn(|t| std::array::from_fn(|j| w[t * c + cb + j]));
+    let bias: [f32; NB] = std::array::from_fn(|j| b[cb + j]);
+    let row = win.in_w * c;
+    for ox in lo..hi {
+        let ix0 = ox * win.stride_w - win.pad_left;
+        let base = iy0 * row + ix0 * c + cb;
+        let mut acc = bias;
+        for ky in 0..3 {
+            for kx in 0..3 {
+                let xi = base + ky * row + kx * c;
+                let xr: &[f32; NB] = x[xi..xi + NB].try_into().unwrap_or(&[0.0; NB]);
+                let wr = &wk[ky * 3 + kx];
+                for j in 0..NB {
+                    acc[j] = M::madd(xr[j], wr[j], acc[j]);
+                }
+            }
+        }
+        let o = (oy * win.out_w + ox) * c + cb;
+        y[o..o + NB].copy_from_slice(&acc);
     }
 }
 
@@ -102,35 +147,6 @@ pub(super) fn valid_taps(
     let k0 = pad.saturating_sub(start).min(k);
     let k1 = (len + pad).saturating_sub(start).min(k).max(k0);
     (k0, k1)
-}
-
-/// [`tap_block`] for an interior pixel of a 3×3 window whose top-left tap is at `xb`.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn full3<M: Madd, const NB: usize>(
-    x: &[f32],
-    w: &[f32],
-    b: &[f32],
-    in_w: usize,
-    c: usize,
-    cb: usize,
-    xb: usize,
-    wb: usize,
-    out: &mut [f32],
-) {
-    let mut acc: [f32; NB] = b[cb..cb + NB].try_into().unwrap_or([0.0; NB]);
-    for ky in 0..3 {
-        for kx in 0..3 {
-            let xi = xb + (ky * in_w + kx) * c + cb;
-            let wi = wb + (ky * 3 + kx) * c + cb;
-            let xr: &[f32; NB] = x[xi..xi + NB].try_into().unwrap_or(&[0.0; NB]);
-            let wr: &[f32; NB] = w[wi..wi + NB].try_into().unwrap_or(&[0.0; NB]);
-            for j in 0..NB {
-                acc[j] = M::madd(xr[j], wr[j], acc[j]);
-            }
-        }
-    }
-    out[cb..cb + NB].copy_from_slice(&acc);
 }
 
 /// Channels `cb .. cb + NB` of one output pixel, accumulated in registers.
