@@ -3,7 +3,9 @@
 //!
 //! Pipeline: [`synthesize`] an ICT-FaceKit face sequence (seeded identity, expression
 //! trajectories, head motion, camera 0.4–0.8 m away) and render its exact depth with
-//! `visage-render` → corrupt the depth with a [`NoiseModel`] that mimics a CNN's errors →
+//! `visage-render` → corrupt the depth with a [`NoiseModel`] that mimics a CNN's errors (and,
+//! for the face-anchored fusion, track the face with a [`simulate_tracking`] tracker whose
+//! landmarks sit on the ICT face through the [`canonical_correspondence`]) →
 //! run every [`Method`] on the same noisy input → score against the truth ([`metrics`]:
 //! point-to-mesh RMSE/median, jitter, lag, curvature improvement and roughness per ERRATA 13,
 //! time per frame) → [`write_results`] (`results.json`, `results.csv`, SVG plots) and
@@ -13,6 +15,7 @@
 //! timing fields.
 
 mod benchmark;
+pub mod canonical_correspondence;
 mod error;
 mod method;
 pub mod metrics;
@@ -20,22 +23,27 @@ mod noise;
 mod normal;
 pub mod point_to_mesh;
 mod report;
+pub mod simulated_tracker;
 mod svg_plot;
 mod synthesis;
 mod taubin;
 mod trajectory;
 
 pub use benchmark::{
-    methods, mix_seed, run_benchmark, run_sweep, sequence_seed, tune_taubin, BenchmarkConfig,
-    BenchmarkResults, PreparedSequence, SequenceInfo, SweepPoint, TaubinTuning, QUICK_EXPRESSIONS,
-    TUNING_SALT,
+    methods, mix_seed, run_benchmark, run_sweep, sequence_seed, tune_taubin, AnchoringInfo,
+    BenchmarkConfig, BenchmarkResults, FaceAnchoring, PreparedSequence, SequenceInfo, SweepPoint,
+    TaubinTuning, ANCHORED_SUBDIVISION, ANCHORED_WEIGHTS, QUICK_EXPRESSIONS, TUNING_SALT,
 };
 pub use error::EvalError;
-pub use method::{Method, MethodInput, MethodRun};
-pub use metrics::{evaluate_sequence, MethodSummary, MetricAccumulator, PerFrame};
+pub use method::{AnchoredInput, Method, MethodInput, MethodRun, VertexKind};
+pub use metrics::{
+    evaluate_sequence, moving_frames, MethodSummary, MetricAccumulator, PerFrame, Scored,
+    VertexSet, VertexTruth,
+};
 pub use noise::{NoiseGenerator, NoiseModel, NOISE_PRESETS};
 pub use normal::standard_normal;
 pub use report::{csv, table, write_results, write_sweep};
+pub use simulated_tracker::{simulate_tracking, TrackedSequence, TrackerNoise};
 pub use svg_plot::{heatmap_svg, line_chart_svg, Series};
 pub use synthesis::{
     synthesize, SynthesisConfig, SyntheticFrame, SyntheticSequence, EXPRESSION_ACTIVITY,

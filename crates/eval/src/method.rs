@@ -1,8 +1,9 @@
 //! The methods compared by the benchmark (issue #5, item 4). Each is a function of the same
-//! input — the noisy depth sequence, the camera and the sequence's meshing domain — and returns
-//! one vertex field per frame on the same image-plane mesh (#V × 3, metres, camera
-//! coordinates), so metrics compare like with like. Adding a method is a variant here and a
-//! line in [`Method::run`].
+//! input — the noisy depth sequence, the camera, the sequence's meshing domain and, for the
+//! face-anchored methods (issue #6), the simulated tracker's landmarks and poses — and returns
+//! one vertex field per frame (#V × 3, metres, camera coordinates) on its [`VertexKind`]: the
+//! image-plane mesh shared by the paper's methods, or the face-anchored mesh. Adding a method
+//! is a variant here and a line in [`Method::run`].
 
 use std::time::Instant;
 
@@ -10,8 +11,12 @@ use faer::Mat;
 use visage_camera::{DepthMap, Intrinsics};
 use visage_fem::{solve_clip, ClipOptions, FusionSystem, Weights};
 use visage_mesh::Mask;
-use visage_pipeline::{FrameStatus, Fuser, FusionSetup, MeshingOptions};
+use visage_pipeline::{
+    AnchoredFrame, AnchoredFuser, FaceDomain, FrameDepth, FrameStatus, Fuser, FusionSetup,
+    MeshingOptions,
+};
 
+use crate::simulated_tracker::TrackedSequence;
 use crate::taubin::taubin_smooth;
 use crate::EvalError;
 
@@ -29,6 +34,34 @@ pub enum Method {
     Clip,
     /// [`Method::Raw`] followed by Taubin λ|μ smoothing with this many iterations.
     Taubin { iterations: usize },
+    /// The face-anchored, pose-compensated streaming fusion (issue #6,
+    /// [`visage_pipeline::AnchoredFuser`]) on the depth sampled at the tracked vertices.
+    FaceAnchored,
+    /// Its whole-clip minimiser: [`visage_fem::solve_clip`] on the head-coordinate right-hand
+    /// sides of the frames, from the streaming solutions.
+    FaceAnchoredClip,
+}
+
+/// The vertex set a method's outputs live on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VertexKind {
+    /// The image-plane mesh of the sequence (`FusionSetup`), the same for every such method.
+    ImagePlane,
+    /// The face-anchored mesh ([`AnchoredInput::domain`]).
+    Anchored,
+}
+
+/// What the face-anchored methods are given on top of the depth.
+#[derive(Clone, Copy, Debug)]
+pub struct AnchoredInput<'a> {
+    /// The face-anchored mesh on the canonical FaceMesh.
+    pub domain: &'a FaceDomain,
+    /// Canonical FaceMesh vertices (head coordinates, metres).
+    pub template: &'a [[f64; 3]],
+    /// The simulated tracker's landmarks and poses.
+    pub tracking: &'a TrackedSequence,
+    /// λ (mm⁴ of the canonical face), μ of the face-anchored fusion.
+    pub weights: Weights,
 }
 
 /// What every method is given: the camera, the sequence's meshing domain and reference
@@ -48,6 +81,8 @@ pub struct MethodInput<'a> {
     pub max_depth_m: f64,
     /// The noisy depth frames.
     pub frames: &'a [DepthMap],
+    /// Input of the face-anchored methods (`None`: they cannot run).
+    pub anchored: Option<AnchoredInput<'a>>,
 }
 
 /// A method's output on one sequence.
@@ -55,6 +90,10 @@ pub struct MethodInput<'a> {
 pub struct MethodRun {
     /// One #V × 3 field per input frame (metres, camera coordinates).
     pub solutions: Vec<Mat<f64>>,
+    pub vertices: VertexKind,
+    /// Per frame, the raw surface at the same vertices when it differs from
+    /// [`Method::Raw`]'s (face-anchored methods); the reference of the curvature improvement.
+    pub raw: Option<Vec<Mat<f64>>>,
     /// Wall time of the per-frame work over the whole sequence, seconds (the fixed set-up —
     /// mesh, operators, factorisation — excluded; it is shared by every frame).
     pub seconds: f64,
@@ -69,17 +108,29 @@ impl Method {
             Method::Streaming => "streaming",
             Method::Clip => "clip",
             Method::Taubin { .. } => "taubin",
+            Method::FaceAnchored => "face_anchored",
+            Method::FaceAnchoredClip => "face_anchored_clip",
         }
     }
 
     /// Runs the method on `input`.
+    ///
+    /// # Errors
+    /// A face-anchored method without [`MethodInput::anchored`], or a failing set-up.
     pub fn run(&self, input: &MethodInput<'_>) -> Result<MethodRun, EvalError> {
-        let setup = FusionSetup::new(input.k, input.domain, input.reference, input.meshing)?;
+        let setup = || FusionSetup::new(input.k, input.domain, input.reference, input.meshing);
+        let anchored = || {
+            input.anchored.ok_or(EvalError::InvalidConfig {
+                name: "method",
+                value: self.name().into(),
+                reason: "needs the tracker input (landmarks and poses)",
+            })
+        };
         match *self {
-            Method::Raw => Ok(raw(setup, input, 0)),
-            Method::Taubin { iterations } => Ok(raw(setup, input, iterations)),
+            Method::Raw => Ok(raw(setup()?, input, 0)),
+            Method::Taubin { iterations } => Ok(raw(setup()?, input, iterations)),
             Method::PerFrameBiharmonic => fused(
-                setup,
+                setup()?,
                 input,
                 Weights {
                     mu: 0.0,
@@ -87,8 +138,10 @@ impl Method {
                 },
                 None,
             ),
-            Method::Streaming => fused(setup, input, input.weights, None),
-            Method::Clip => fused(setup, input, input.weights, Some(input.clip)),
+            Method::Streaming => fused(setup()?, input, input.weights, None),
+            Method::Clip => fused(setup()?, input, input.weights, Some(input.clip)),
+            Method::FaceAnchored => face_anchored(input, &anchored()?, None),
+            Method::FaceAnchoredClip => face_anchored(input, &anchored()?, Some(input.clip)),
         }
     }
 }
@@ -110,6 +163,8 @@ fn raw(setup: FusionSetup, input: &MethodInput<'_>, taubin: usize) -> MethodRun 
     }
     MethodRun {
         solutions,
+        vertices: VertexKind::ImagePlane,
+        raw: None,
         seconds: start.elapsed().as_secs_f64(),
     }
 }
@@ -156,6 +211,67 @@ fn fused(
     }
     Ok(MethodRun {
         solutions,
+        vertices: VertexKind::ImagePlane,
+        raw: None,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+fn to_mat(points: &[[f64; 3]]) -> Mat<f64> {
+    Mat::from_fn(points.len(), 3, |i, c| points[i][c])
+}
+
+/// The face-anchored fusion: per frame the tracked landmarks place the vertices, the noisy
+/// depth is sampled there (`FrameDepth::Map`) and the pose compensates the temporal term; with
+/// `clip`, the whole-clip solve in head coordinates over the solved frames (frames without
+/// data are carried, as in [`fused`]).
+fn face_anchored(
+    input: &MethodInput<'_>,
+    a: &AnchoredInput<'_>,
+    clip: Option<&ClipOptions>,
+) -> Result<MethodRun, EvalError> {
+    let mut fuser = AnchoredFuser::new(
+        a.domain.clone(),
+        a.template,
+        *input.k,
+        a.weights,
+        input.max_depth_m,
+    )?;
+    let n = a.domain.vertex_count();
+    let (mut solutions, mut raw) = (Vec::new(), Vec::new());
+    let (mut bs, mut xs, mut members) = (Vec::new(), Vec::new(), Vec::new());
+    let start = Instant::now();
+    for (index, depth) in input.frames.iter().enumerate() {
+        let r = fuser.process(&AnchoredFrame {
+            landmarks_px: &a.tracking.landmarks_px[index],
+            pose: a.tracking.poses[index],
+            depth: FrameDepth::Map(depth),
+        })?;
+        if r.status == FrameStatus::NoData {
+            let last = solutions.last().cloned();
+            solutions.push(last.clone().unwrap_or_else(|| Mat::zeros(n, 3)));
+            raw.push(last.unwrap_or_else(|| Mat::zeros(n, 3)));
+            continue;
+        }
+        solutions.push(to_mat(fuser.solution()));
+        raw.push(to_mat(fuser.raw()));
+        if clip.is_some() && r.status == FrameStatus::Solved {
+            bs.push(fuser.rhs().to_owned());
+            xs.push(fuser.solution_head().to_owned());
+            members.push(index);
+        }
+    }
+    if let Some(options) = clip {
+        solve_clip(fuser.solver_mut().system_mut(), &bs, &mut xs, options);
+        for (x, &i) in xs.iter().zip(&members) {
+            fuser.set_solution_head(x, a.tracking.poses[i]);
+            solutions[i] = to_mat(fuser.solution());
+        }
+    }
+    Ok(MethodRun {
+        solutions,
+        vertices: VertexKind::Anchored,
+        raw: Some(raw),
         seconds: start.elapsed().as_secs_f64(),
     })
 }

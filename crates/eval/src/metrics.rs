@@ -1,40 +1,47 @@
 //! The benchmark's metrics (issue #5, item 5; ERRATA 13), accumulated over sequences.
 //!
-//! The methods' meshes live on the image plane: vertex i is the pixel position x_i with unit
-//! ray ρ_i (Eq. 2.1), the same for every frame and method. With the ground truth (GT) of
-//! frame k — its posed mesh and its exact rendered depth — define, per vertex:
-//! - **face set** F_k: vertices whose nearest pixel sees a [`visage_morphable::Region::Face`]
-//!   triangle in the GT render;
-//! - g_k(i): the GT distance along ρ_i (bilinear in the rendered depth; undefined off the head).
+//! A method's outputs s_k (#V × 3, camera coordinates, metres) live on its own vertex set, and
+//! each vertex stands for a point whose ground truth (GT) is known ([`VertexTruth`]):
+//! - **image-plane vertices** (the paper's mesh): vertex i is the pixel x_i with unit ray ρ_i
+//!   (Eq. 2.1); its GT point is g_k(i) ρ_i, g_k(i) the GT distance along ρ_i (bilinear in the
+//!   rendered depth; undefined off the head), and it is in the **face set** F_k when its
+//!   nearest pixel sees a [`visage_morphable::Region::Face`] triangle in the GT render;
+//! - **face-anchored vertices** (issue #6): vertex i is a fixed point of the face; its GT point
+//!   g_k(i) is that material point on frame k's GT mesh (through the
+//!   [`crate::canonical_correspondence`]), and every vertex is in F_k.
 //!
-//! Metrics of a method with outputs s_k (#V × 3):
+//! Metrics:
 //! - **surface error** e = distance from s_k(i) to the GT mesh of frame k (exact point-to-mesh),
 //!   over i ∈ F_k; `rmse_mm` = √mean e², `median_mm` = median e, pooled over frames and sequences.
-//! - **jitter** (mm/frame) = √mean ‖(s_k(i) − s_{k−1}(i)) − (g_k(i) − g_{k−1}(i)) ρ_i‖² over
+//! - **jitter** (mm/frame) = √mean ‖(s_k(i) − s_{k−1}(i)) − (g_k(i) − g_{k−1}(i))‖² over
 //!   i ∈ F_k ∩ F_{k−1} with g defined at both: the frame-to-frame motion the method adds on top
-//!   of the true surface motion along the same ray.
+//!   of the true motion of the same point (for image-plane vertices, of the surface along the
+//!   same ray).
 //! - **lag** (frames) = argmin over τ ∈ [0, [`LAG_MAX`]] of
-//!   E(τ) = mean (s_k(i)·ρ_i − g_{k−τ}(i))² over moving frames k ≥ [`LAG_MAX`] (GT motion RMS
-//!   ≥ [`MOVING_MM_PER_FRAME`]) and i ∈ F_k with g_{k−τ}(i) defined, refined by a parabola
-//!   through the minimum and its neighbours: which past ground truth the output resembles most
-//!   while the head moves.
+//!   E(τ) = mean ‖(s_k(i) − s_{k−1}(i)) − (g_{k−τ}(i) − g_{k−τ−1}(i))‖² over moving frames k
+//!   ([`moving_frames`]) and i ∈ F_k with g defined at k−τ and k−τ−1, refined by a parabola
+//!   through the minimum and its neighbours: how many frames late the method's motion follows
+//!   the true motion of the same points. Comparing motions rather than positions makes the lag
+//!   blind to static offsets (a landmark's bias over the skin, the correspondence's residual),
+//!   so it means the same for both vertex sets; E(0) is the jitter² over those frames.
 //! - **curvature improvement** = mean over frames of mean |H|(raw) / mean |H|(method), and
 //!   **roughness** = mean over frames of the mean one-ring normal deviation (radians), both
-//!   over the interior vertices of the whole image-plane mesh (`visage_fem::SurfaceMetrics`,
-//!   ERRATA 13). Raw's improvement is 1 by definition.
+//!   over the interior vertices of the method's mesh (`visage_fem::SurfaceMetrics`, ERRATA 13);
+//!   "raw" is the raw surface sampled at the same vertices. Raw's improvement is 1 by
+//!   definition.
 //! - **ms_per_frame**: the method's per-frame wall time (set-up excluded).
 
 use faer::Mat;
 use visage_fem::SurfaceMetrics;
-use visage_pipeline::{to_positions, FusionSetup};
+use visage_pipeline::{to_positions, FaceDomain, FusionSetup};
 
 use crate::point_to_mesh::TriangleGrid;
 use crate::synthesis::SyntheticSequence;
 
 /// Largest lag searched, frames.
 pub const LAG_MAX: usize = 8;
-/// A frame counts as moving for the lag when the RMS GT motion along the rays of its face
-/// vertices is at least this, mm/frame.
+/// A frame counts as moving for the lag when the RMS GT motion of the face-region vertices of
+/// the model is at least this, mm/frame.
 pub const MOVING_MM_PER_FRAME: f64 = 0.5;
 /// Side of the point-to-mesh grid cells, metres.
 const GRID_CELL_M: f64 = 0.005;
@@ -163,111 +170,183 @@ impl MetricAccumulator {
     }
 }
 
-/// Per-sequence ground truth sampled at the image-plane vertices.
-struct VertexTruth {
-    /// [frame][vertex]: in the face set.
-    face: Vec<Vec<bool>>,
-    /// [frame][vertex]: GT ray distance, metres.
-    ray: Vec<Vec<Option<f64>>>,
+/// The ground truth of one vertex set over a sequence.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VertexTruth {
+    /// [frame][vertex]: whether the vertex is in the face set F_k.
+    pub face: Vec<Vec<bool>>,
+    /// [frame][vertex]: GT camera-space point the vertex stands for, metres.
+    pub points: Vec<Vec<Option<[f64; 3]>>>,
 }
 
-fn vertex_truth(seq: &SyntheticSequence, setup: &FusionSetup) -> VertexTruth {
-    let k = &seq.k;
-    let points = &setup.mesh.points;
-    let face = seq
-        .frames
-        .iter()
-        .map(|f| {
-            points
+impl VertexTruth {
+    /// Image-plane vertices of `setup`: face set from the GT face mask at the nearest pixel,
+    /// points `g_k(i) ρ_i`.
+    pub fn image_plane(seq: &SyntheticSequence, setup: &FusionSetup) -> VertexTruth {
+        let k = &seq.k;
+        let points = &setup.mesh.points;
+        VertexTruth {
+            face: seq
+                .frames
                 .iter()
-                .map(|p| f.face.get(p[0].round() as i64, p[1].round() as i64))
-                .collect()
-        })
-        .collect();
-    let ray = seq
-        .frames
-        .iter()
-        .map(|f| {
-            points
+                .map(|f| {
+                    points
+                        .iter()
+                        .map(|p| f.face.get(p[0].round() as i64, p[1].round() as i64))
+                        .collect()
+                })
+                .collect(),
+            points: seq
+                .frames
                 .iter()
-                .map(|p| f.depth.sample_ray_distance(k, p[0], p[1]))
-                .collect()
-        })
-        .collect();
-    VertexTruth { face, ray }
+                .map(|f| {
+                    points
+                        .iter()
+                        .zip(&setup.rays)
+                        .map(|(p, r)| {
+                            f.depth
+                                .sample_ray_distance(k, p[0], p[1])
+                                .map(|g| r.map(|c| g * c))
+                        })
+                        .collect()
+                })
+                .collect(),
+        }
+    }
+
+    /// Face-anchored vertices of `domain`, from the GT positions of its template vertices per
+    /// frame (`template_truth[k]`, one point per template vertex): every vertex is on the face.
+    ///
+    /// # Panics
+    /// If a frame does not have one point per template vertex.
+    #[track_caller]
+    pub fn anchored(domain: &FaceDomain, template_truth: &[Vec<[f64; 3]>]) -> VertexTruth {
+        let n = domain.vertex_count();
+        let mut at = vec![[0.0; 3]; n];
+        VertexTruth {
+            face: vec![vec![true; n]; template_truth.len()],
+            points: template_truth
+                .iter()
+                .map(|t| {
+                    domain.interpolate(t, &mut at);
+                    at.iter().map(|&p| Some(p)).collect()
+                })
+                .collect(),
+        }
+    }
 }
 
-/// Evaluates every method's outputs on one sequence into `accumulators` (same order as
-/// `outputs`). `raw_index` is the position of the raw back-projection among `outputs`
-/// (the reference of the curvature improvement). All outputs live on `setup`'s mesh.
+/// A method's vertex set: its mesh (for the ERRATA 13 metrics) and its ground truth.
+#[derive(Clone, Copy, Debug)]
+pub struct VertexSet<'a> {
+    pub triangles: &'a [[u32; 3]],
+    /// Per vertex: on the mesh boundary.
+    pub boundary: &'a [bool],
+    pub truth: &'a VertexTruth,
+}
+
+/// One method's outputs on a sequence, to be scored.
+#[derive(Clone, Copy, Debug)]
+pub struct Scored<'a> {
+    pub vertices: VertexSet<'a>,
+    /// One #V × 3 field per frame.
+    pub solutions: &'a [Mat<f64>],
+    /// The raw surface at the same vertices per frame (reference of the curvature improvement).
+    pub raw: &'a [Mat<f64>],
+}
+
+/// Per frame: whether it counts for the lag — k > [`LAG_MAX`] and the RMS GT motion of the
+/// model's face-region vertices from frame k−1 is at least [`MOVING_MM_PER_FRAME`].
+pub fn moving_frames(seq: &SyntheticSequence) -> Vec<bool> {
+    let face = visage_morphable::Region::Face.range();
+    (0..seq.frames.len())
+        .map(|k| {
+            if k <= LAG_MAX {
+                return false;
+            }
+            let (a, b) = (&seq.frames[k].vertices, &seq.frames[k - 1].vertices);
+            let s: f64 = face
+                .clone()
+                .map(|i| (0..3).map(|c| (a[i][c] - b[i][c]).powi(2)).sum::<f64>())
+                .sum();
+            1e3 * (s / face.len() as f64).sqrt() >= MOVING_MM_PER_FRAME
+        })
+        .collect()
+}
+
+fn row(m: &Mat<f64>, i: usize) -> [f64; 3] {
+    [m[(i, 0)], m[(i, 1)], m[(i, 2)]]
+}
+
+fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|c| (a[c] - b[c]).powi(2)).sum()
+}
+
+/// Evaluates every method's outputs on one sequence into `accumulators` (same order as `runs`).
 ///
 /// # Panics
-/// If an output does not have one #V × 3 field per frame of `seq`, or `raw_index` is out of range.
+/// If a run does not have one field per frame of `seq`, or its fields, raw surfaces and truth
+/// disagree on the vertex count.
 #[track_caller]
 pub fn evaluate_sequence(
     seq: &SyntheticSequence,
-    setup: &FusionSetup,
-    outputs: &[&[Mat<f64>]],
-    raw_index: usize,
+    runs: &[Scored<'_>],
     accumulators: &mut [MetricAccumulator],
 ) {
     let n_frames = seq.frames.len();
-    let n = setup.vertex_count();
-    assert!(outputs
-        .iter()
-        .all(|o| o.len() == n_frames && o.iter().all(|m| m.nrows() == n)));
-    let truth = vertex_truth(seq, setup);
-    let rays = &setup.rays;
-    let mut quality = SurfaceMetrics::new(n, &setup.mesh.triangles, &setup.boundary);
-    let mut positions = vec![[0.0; 3]; n];
+    assert_eq!(runs.len(), accumulators.len());
+    for r in runs {
+        let n = r.vertices.boundary.len();
+        assert!(r.solutions.len() == n_frames && r.raw.len() == n_frames);
+        assert!(r
+            .solutions
+            .iter()
+            .chain(r.raw)
+            .all(|m| m.nrows() == n && m.ncols() == 3));
+        assert!(
+            r.vertices.truth.face.len() == n_frames && r.vertices.truth.points.len() == n_frames
+        );
+    }
     for acc in accumulators.iter_mut() {
         if acc.frame_err.len() < n_frames {
             acc.frame_err.resize(n_frames, (0.0, 0));
             acc.frame_jit.resize(n_frames, (0.0, 0));
         }
     }
-    // Moving frames for the lag.
-    let moving: Vec<bool> = (0..n_frames)
-        .map(|k| {
-            if k < LAG_MAX {
-                return false;
-            }
-            let (mut s, mut c) = (0.0, 0usize);
-            for i in 0..n {
-                if let (true, Some(a), Some(b)) =
-                    (truth.face[k][i], truth.ray[k][i], truth.ray[k - 1][i])
-                {
-                    s += (a - b) * (a - b);
-                    c += 1;
-                }
-            }
-            c > 0 && 1e3 * (s / c as f64).sqrt() >= MOVING_MM_PER_FRAME
+    let moving = moving_frames(seq);
+    let mut quality: Vec<SurfaceMetrics> = runs
+        .iter()
+        .map(|r| {
+            SurfaceMetrics::new(
+                r.vertices.boundary.len(),
+                r.vertices.triangles,
+                r.vertices.boundary,
+            )
         })
         .collect();
-
-    for k in 0..n_frames {
-        let face: Vec<usize> = (0..n).filter(|&i| truth.face[k][i]).collect();
-        if face.is_empty() {
-            continue;
-        }
+    let mut positions = Vec::new();
+    for (k, &moving_k) in moving.iter().enumerate() {
         let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
-        for out in outputs {
-            for &i in &face {
+        for r in runs {
+            for (i, _) in r.vertices.truth.face[k].iter().enumerate().filter(|f| *f.1) {
                 for c in 0..3 {
-                    lo[c] = lo[c].min(out[k][(i, c)]);
-                    hi[c] = hi[c].max(out[k][(i, c)]);
+                    lo[c] = lo[c].min(r.solutions[k][(i, c)]);
+                    hi[c] = hi[c].max(r.solutions[k][(i, c)]);
                 }
             }
+        }
+        if lo[0] > hi[0] {
+            continue;
         }
         let gt = &seq.frames[k].vertices;
         let grid = TriangleGrid::new(gt, &seq.triangles, lo, hi, GRID_MARGIN_M, GRID_CELL_M);
-        to_positions(outputs[raw_index][k].as_ref(), &mut positions);
-        let raw_quality = quality.evaluate(&positions);
-        for (out, acc) in outputs.iter().zip(accumulators.iter_mut()) {
-            let s = &out[k];
+        for ((r, acc), quality) in runs.iter().zip(accumulators.iter_mut()).zip(&mut quality) {
+            let (s, truth) = (&r.solutions[k], r.vertices.truth);
+            let n = s.nrows();
+            let face = &truth.face[k];
             // Surface error.
-            for &i in &face {
-                if let Some(e) = grid.distance([s[(i, 0)], s[(i, 1)], s[(i, 2)]]) {
+            for i in (0..n).filter(|&i| face[i]) {
+                if let Some(e) = grid.distance(row(s, i)) {
                     acc.errors.push(e);
                     acc.frame_err[k].0 += e * e;
                     acc.frame_err[k].1 += 1;
@@ -275,11 +354,11 @@ pub fn evaluate_sequence(
             }
             // Jitter.
             if k > 0 {
-                let p = &out[k - 1];
-                for &i in face.iter().filter(|&&i| truth.face[k - 1][i]) {
-                    if let (Some(g1), Some(g0)) = (truth.ray[k][i], truth.ray[k - 1][i]) {
+                let p = &r.solutions[k - 1];
+                for i in (0..n).filter(|&i| face[i] && truth.face[k - 1][i]) {
+                    if let (Some(g1), Some(g0)) = (truth.points[k][i], truth.points[k - 1][i]) {
                         let d2: f64 = (0..3)
-                            .map(|c| ((s[(i, c)] - p[(i, c)]) - (g1 - g0) * rays[i][c]).powi(2))
+                            .map(|c| ((s[(i, c)] - p[(i, c)]) - (g1[c] - g0[c])).powi(2))
                             .sum();
                         acc.jitter_sq += d2;
                         acc.jitter_n += 1;
@@ -288,19 +367,24 @@ pub fn evaluate_sequence(
                     }
                 }
             }
-            // Lag.
-            if moving[k] {
+            // Lag: the method's motion against the true motion τ frames earlier.
+            if moving_k {
+                let p = &r.solutions[k - 1];
                 for tau in 0..=LAG_MAX {
-                    for &i in &face {
-                        if let Some(g) = truth.ray[k - tau][i] {
-                            let d = (0..3).map(|c| s[(i, c)] * rays[i][c]).sum::<f64>();
-                            acc.lag_sq[tau] += (d - g) * (d - g);
+                    let (g1, g0) = (&truth.points[k - tau], &truth.points[k - tau - 1]);
+                    for i in (0..n).filter(|&i| face[i]) {
+                        if let (Some(a), Some(b)) = (g1[i], g0[i]) {
+                            let v: [f64; 3] = std::array::from_fn(|c| s[(i, c)] - p[(i, c)]);
+                            acc.lag_sq[tau] += dist2(v, std::array::from_fn(|c| a[c] - b[c]));
                             acc.lag_n[tau] += 1;
                         }
                     }
                 }
             }
             // Surface quality (ERRATA 13).
+            positions.resize(n, [0.0; 3]);
+            to_positions(r.raw[k].as_ref(), &mut positions);
+            let raw_quality = quality.evaluate(&positions);
             to_positions(s.as_ref(), &mut positions);
             let q = quality.evaluate(&positions);
             acc.improvement += if q.mean_abs_h > 0.0 {

@@ -20,59 +20,73 @@ fn add_scaled(a: V3, s: f64, b: V3) -> V3 {
 
 /// Squared distance from `p` to the triangle `(a, b, c)` (degenerate triangles included).
 pub fn point_triangle_distance2(p: V3, a: V3, b: V3, c: V3) -> f64 {
+    let w = closest_point_barycentric(p, a, b, c);
+    let q: V3 = std::array::from_fn(|i| w[0] * a[i] + w[1] * b[i] + w[2] * c[i]);
+    let d = sub(p, q);
+    dot(d, d)
+}
+
+/// Barycentric coordinates `(w_a, w_b, w_c)` (non-negative, summing to 1) of the point of the
+/// triangle `(a, b, c)` closest to `p` (Ericson 2005, §5.1.5; a degenerate triangle gives the
+/// closest point of its nearest edge).
+pub fn closest_point_barycentric(p: V3, a: V3, b: V3, c: V3) -> [f64; 3] {
     let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(p, a));
     let (d1, d2) = (dot(ab, ap), dot(ac, ap));
-    let closest = if d1 <= 0.0 && d2 <= 0.0 {
-        a
-    } else {
-        let bp = sub(p, b);
-        let (d3, d4) = (dot(ab, bp), dot(ac, bp));
-        if d3 >= 0.0 && d4 <= d3 {
-            b
-        } else {
-            let vc = d1 * d4 - d3 * d2;
-            if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-                add_scaled(a, d1 / (d1 - d3), ab)
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return [1.0, 0.0, 0.0];
+    }
+    let bp = sub(p, b);
+    let (d3, d4) = (dot(ab, bp), dot(ac, bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return [0.0, 1.0, 0.0];
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return [1.0 - v, v, 0.0];
+    }
+    let cp = sub(p, c);
+    let (d5, d6) = (dot(ab, cp), dot(ac, cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return [0.0, 0.0, 1.0];
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return [1.0 - w, 0.0, w];
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return [0.0, 1.0 - w, w];
+    }
+    let denom = va + vb + vc;
+    if denom.abs() < f64::MIN_POSITIVE {
+        // Degenerate (collinear): the closest point of the nearest edge.
+        let edge = |x: V3, y: V3| {
+            let d = sub(y, x);
+            let l2 = dot(d, d);
+            let t = if l2 > 0.0 {
+                (dot(sub(p, x), d) / l2).clamp(0.0, 1.0)
             } else {
-                let cp = sub(p, c);
-                let (d5, d6) = (dot(ab, cp), dot(ac, cp));
-                if d6 >= 0.0 && d5 <= d6 {
-                    c
-                } else {
-                    let vb = d5 * d2 - d1 * d6;
-                    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-                        add_scaled(a, d2 / (d2 - d6), ac)
-                    } else {
-                        let va = d3 * d6 - d5 * d4;
-                        if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-                            add_scaled(b, (d4 - d3) / ((d4 - d3) + (d5 - d6)), sub(c, b))
-                        } else {
-                            let denom = va + vb + vc;
-                            if denom.abs() < f64::MIN_POSITIVE {
-                                // Degenerate (collinear): nearest of the three edges.
-                                let e = |x: V3, y: V3| {
-                                    let d = sub(y, x);
-                                    let l2 = dot(d, d);
-                                    let t = if l2 > 0.0 {
-                                        (dot(sub(p, x), d) / l2).clamp(0.0, 1.0)
-                                    } else {
-                                        0.0
-                                    };
-                                    let q = add_scaled(x, t, d);
-                                    dot(sub(p, q), sub(p, q))
-                                };
-                                return e(a, b).min(e(b, c)).min(e(c, a));
-                            }
-                            let (v, w) = (vb / denom, vc / denom);
-                            add_scaled(add_scaled(a, v, ab), w, ac)
-                        }
-                    }
-                }
-            }
-        }
-    };
-    let d = sub(p, closest);
-    dot(d, d)
+                0.0
+            };
+            let q = add_scaled(x, t, d);
+            (dot(sub(p, q), sub(p, q)), t)
+        };
+        let (ab_d, ab_t) = edge(a, b);
+        let (bc_d, bc_t) = edge(b, c);
+        let (ca_d, ca_t) = edge(c, a);
+        return if ab_d <= bc_d && ab_d <= ca_d {
+            [1.0 - ab_t, ab_t, 0.0]
+        } else if bc_d <= ca_d {
+            [0.0, 1.0 - bc_t, bc_t]
+        } else {
+            [ca_t, 0.0, 1.0 - ca_t]
+        };
+    }
+    let (v, w) = (vb / denom, vc / denom);
+    [1.0 - v - w, v, w]
 }
 
 /// A uniform grid over a triangle set, for exact nearest-distance queries.

@@ -9,8 +9,10 @@ use std::path::PathBuf;
 use anyhow::{bail, Context};
 use clap::{Args, Subcommand};
 use visage_eval::{
-    run_benchmark, run_sweep, table, write_results, write_sweep, BenchmarkConfig, NoiseModel,
+    run_benchmark, run_sweep, table, write_results, write_sweep, BenchmarkConfig, FaceAnchoring,
+    Method, NoiseModel, ANCHORED_WEIGHTS,
 };
+use visage_face::CanonicalMesh;
 use visage_fem::Weights;
 use visage_morphable::IctModel;
 
@@ -38,14 +40,14 @@ pub struct SyntheticArgs {
     /// Output folder (created).
     #[arg(long)]
     pub out: PathBuf,
-    /// The small setting of the test suite (1 sequence × 16 frames, 160×120, a few modes);
+    /// The small setting of the test suite (3 sequences × 24 frames, a few modes);
     /// --sequences/--frames still override it.
     #[arg(long)]
     pub quick: bool,
-    /// Number of scored sequences (default 10; quick: 1).
+    /// Number of scored sequences (default 10; quick: 3).
     #[arg(long)]
     pub sequences: Option<usize>,
-    /// Frames per sequence (default 120; quick: 16).
+    /// Frames per sequence (default 120; quick: 24).
     #[arg(long)]
     pub frames: Option<usize>,
     /// Noise preset: none, gaussian, lowfreq, flicker, holes, edges, cnn-like.
@@ -54,19 +56,33 @@ pub struct SyntheticArgs {
     /// Master seed; the same seed gives the same results.json (timings aside).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Smoothness weight λ of the fusion methods.
+    /// Smoothness weight λ of the image-plane fusion methods (reference pixels⁴).
     #[arg(long, default_value_t = Weights::default().lambda, allow_hyphen_values = true)]
     pub lambda: f64,
-    /// Temporal weight μ of the fusion methods.
+    /// Temporal weight μ of the image-plane fusion methods.
     #[arg(long, default_value_t = Weights::default().mu, allow_hyphen_values = true)]
     pub mu: f64,
-    /// Also sweep the streaming fusion over these λ values (comma-separated), with --sweep-mu;
+    /// Smoothness weight λ of the face-anchored methods (mm⁴ of the canonical face).
+    #[arg(long, default_value_t = ANCHORED_WEIGHTS.lambda, allow_hyphen_values = true)]
+    pub anchored_lambda: f64,
+    /// Temporal weight μ of the face-anchored methods.
+    #[arg(long, default_value_t = ANCHORED_WEIGHTS.mu, allow_hyphen_values = true)]
+    pub anchored_mu: f64,
+    /// Folder of the MediaPipe model files (the canonical face of the face-anchored methods;
+    /// default: $VISAGE_MODELS, ./models, or models/ beside the executable). Without them the
+    /// face-anchored methods are skipped, with a warning.
+    #[arg(long)]
+    pub models: Option<PathBuf>,
+    /// Also sweep a fusion over these λ values (comma-separated), with --sweep-mu;
     /// writes OUT/sweep.json, sweep.csv, sweep_rmse.svg, sweep_jitter.svg.
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub sweep_lambda: Vec<f64>,
     /// μ values of the sweep (comma-separated).
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub sweep_mu: Vec<f64>,
+    /// The method swept: streaming (image-plane) or face_anchored.
+    #[arg(long, default_value = "streaming")]
+    pub sweep_method: String,
     /// Write the shaded colour image of each sequence's first frame (OUT/frames/).
     #[arg(long)]
     pub save_frames: bool,
@@ -116,21 +132,50 @@ fn config(args: &SyntheticArgs) -> anyhow::Result<BenchmarkConfig> {
         lambda: args.lambda,
         mu: args.mu,
     };
+    c.anchored_weights = Weights {
+        lambda: args.anchored_lambda,
+        mu: args.anchored_mu,
+    };
     if args.sweep_lambda.is_empty() != args.sweep_mu.is_empty() {
         bail!("--sweep-lambda and --sweep-mu go together");
     }
+    sweep_method(&args.sweep_method)?;
     c.validate()?;
     Ok(c)
 }
 
+fn sweep_method(name: &str) -> anyhow::Result<Method> {
+    match name {
+        "streaming" => Ok(Method::Streaming),
+        "face_anchored" => Ok(Method::FaceAnchored),
+        _ => bail!("--sweep-method {name:?}: expected streaming or face_anchored"),
+    }
+}
+
 fn synthetic(args: SyntheticArgs) -> anyhow::Result<()> {
     let config = config(&args)?;
+    let method = sweep_method(&args.sweep_method)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create", args.out.display()))?;
     eprintln!("loading {}", args.model.display());
     let model = IctModel::load_with(&args.model, &config.import)?;
+    let models = args.models.clone().unwrap_or_else(visage_face::models_dir);
+    let anchoring = match CanonicalMesh::load(&models) {
+        Ok(canonical) => Some(FaceAnchoring::new(
+            &model,
+            canonical,
+            config.anchored_subdivision,
+        )?),
+        Err(e) => {
+            eprintln!("warning: face-anchored methods skipped: {e}");
+            None
+        }
+    };
+    if method == Method::FaceAnchored && anchoring.is_none() && !args.sweep_lambda.is_empty() {
+        bail!("--sweep-method face_anchored needs the model files (--models)");
+    }
     let mut progress = |line: &str| eprintln!("{line}");
-    let results = run_benchmark(&model, &config, &mut progress)?;
+    let results = run_benchmark(&model, anchoring.as_ref(), &config, &mut progress)?;
     write_results(&results, &args.out)?;
     if args.save_frames {
         let dir = args.out.join("frames");
@@ -158,7 +203,9 @@ fn synthetic(args: SyntheticArgs) -> anyhow::Result<()> {
     if !args.sweep_lambda.is_empty() {
         let points = run_sweep(
             &model,
+            anchoring.as_ref(),
             &config,
+            method,
             &args.sweep_lambda,
             &args.sweep_mu,
             &mut progress,
@@ -196,6 +243,10 @@ mod tests {
             mu: 2.0,
             sweep_lambda: Vec::new(),
             sweep_mu: Vec::new(),
+            sweep_method: "streaming".into(),
+            anchored_lambda: 30.0,
+            anchored_mu: 4.0,
+            models: None,
             save_frames: false,
             max_yaw: Some(0.0),
             max_pitch: None,
@@ -208,6 +259,18 @@ mod tests {
         let c = config(&args()).unwrap();
         assert_eq!((c.sequences, c.synthesis.frames, c.seed), (1, 20, 3));
         assert_eq!((c.weights.lambda, c.weights.mu), (1.0, 2.0));
+        assert_eq!(
+            (c.anchored_weights.lambda, c.anchored_weights.mu),
+            (30.0, 4.0)
+        );
+        let bad_method = SyntheticArgs {
+            sweep_method: "clip".into(),
+            ..args()
+        };
+        assert!(config(&bad_method)
+            .unwrap_err()
+            .to_string()
+            .contains("sweep-method"));
         assert_eq!(c.noise, NoiseModel::preset("gaussian").unwrap());
         assert_eq!(
             (c.synthesis.max_yaw_deg, c.synthesis.max_pitch_deg),
