@@ -5,9 +5,10 @@ use visage_camera::{DepthKind, DepthMap};
 use visage_mesh::TriMesh;
 
 use crate::camera::Camera;
+use crate::deferred::{Block, CornerAttributes, DeferredPass};
 use crate::mat4::{Mat3, Mat4};
 use crate::normals::{normal_matrix, transform_normal, vertex_normals_into};
-use crate::rasterize::{CullMode, Rasterizer, ScreenTriangle, NO_TRIANGLE};
+use crate::rasterize::{CullMode, Rasterizer, NO_TRIANGLE};
 use crate::shading::{BlinnPhong, Light, Material};
 use crate::texture::{Texture, Wrap};
 use crate::RenderError;
@@ -220,11 +221,17 @@ impl Renderer {
                 );
             });
 
-        // Steps 7–10: one shading evaluation per visible pixel.
-        let raster = &self.rasterizer;
-        let corners = &self.corners;
-        let (inv_fx, inv_fy) = (1.0 / k.fx, 1.0 / k.fy);
-        let kind = frame.depth.kind;
+        // Steps 7–10: one reconstruction and shading evaluation per visible pixel.
+        let pass = DeferredPass {
+            raster: &self.rasterizer,
+            corners: &self.corners,
+            shader,
+            albedo: scene.albedo,
+            background: scene.background,
+            two_sided: scene.two_sided,
+            intrinsics: k,
+            kind: frame.depth.kind,
+        };
         let w = k.width as usize;
         // Rows of the optional buffers, or empty rows when a buffer is not wanted.
         let tri_rows: Vec<&mut [u32]> = if frame.triangle_id.is_empty() {
@@ -244,146 +251,12 @@ impl Renderer {
             .zip(tri_rows)
             .zip(bary_rows)
             .enumerate()
-            .for_each(|(y, (((c_row, d_row), t_row), b_row))| {
-                let setups = raster.visibility_row(y);
-                let yf = y as f64;
-                let yr = (yf - k.cy) * inv_fy;
-                let yr2_plus_1 = yr * yr + 1.0;
-                let (yr32, yr2_plus_1_32) = (yr as f32, yr2_plus_1 as f32);
-                // The row in spans of equal set-up id: per-triangle work (indices, corner
-                // attributes, row-constant edge terms) is done once per span, not per pixel.
-                let mut x = 0;
-                while x < w {
-                    let s = setups[x];
-                    let end = x + setups[x..].iter().take_while(|&&t| t == s).count();
-                    let id = ((s >> 16) as usize, (s & 0xffff) as usize);
-                    let found = (s != NO_TRIANGLE)
-                        .then(|| {
-                            let st = raster.setup_chunks().get(id.0)?.get(id.1)?;
-                            Some((st, corners.get(id.0)?.get(id.1)?))
-                        })
-                        .flatten();
-                    let Some((st, ca)) = found else {
-                        c_row[x..end].fill(scene.background);
-                        d_row[x..end].fill(0.0);
-                        if let Some(t) = t_row.get_mut(x..end) {
-                            t.fill(NO_TRIANGLE);
-                        }
-                        if let Some(b) = b_row.get_mut(x..end) {
-                            b.fill([0.0; 3]);
-                        }
-                        x = end;
-                        continue;
-                    };
-                    let triangle = st.triangle();
-                    let corner_normals = &ca.normals;
-                    let rows = st.rows(yf);
-                    for x in x..end {
-                        let (wt, z) = st.corner_weights(&rows, x as f64);
-                        let wf = wt.map(|v| v as f32);
-                        // The surface point is z · (x', y', 1) on this pixel's ray, so the
-                        // unit view vector (surface → eye) and |p|/z come from the ray alone.
-                        // `f32` suffices for shading; ray depth takes `|p|/z` in `f64` below.
-                        let xr = (x as f64 - k.cx) * inv_fx;
-                        let xr32 = xr as f32;
-                        let inv = -1.0 / (xr32 * xr32 + yr2_plus_1_32).sqrt();
-                        let view = [xr32 * inv, yr32 * inv, inv];
-                        let cn = &corner_normals;
-                        let mut n: [f32; 3] = std::array::from_fn(|c| {
-                            wf[0] * cn[0][c] + wf[1] * cn[1][c] + wf[2] * cn[2][c]
-                        });
-                        let n_len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-                        if n_len > 0.0 {
-                            let inv = 1.0 / n_len;
-                            n = n.map(|v| v * inv);
-                        }
-                        if scene.two_sided && n[0] * view[0] + n[1] * view[1] + n[2] * view[2] < 0.0
-                        {
-                            n = n.map(|v| -v);
-                        }
-                        let albedo = match scene.albedo {
-                            Albedo::Texture { texture, wrap } => {
-                                let cxy = &ca.texel;
-                                let xy = std::array::from_fn(|c| {
-                                    wt[0] * cxy[0][c] + wt[1] * cxy[1][c] + wt[2] * cxy[2][c]
-                                });
-                                texture.sample_rgb_at(xy, wrap)
-                            }
-                            Albedo::VertexColors => {
-                                let cc = &ca.color;
-                                std::array::from_fn(|c| {
-                                    wf[0] * cc[0][c] + wf[1] * cc[1][c] + wf[2] * cc[2][c]
-                                })
-                            }
-                            Albedo::Constant(c) => c,
-                        };
-                        c_row[x] = shader.shade(n, view, albedo);
-                        let value = match kind {
-                            DepthKind::Z => z,
-                            DepthKind::Ray => z * (xr * xr + yr2_plus_1).sqrt(),
-                        };
-                        d_row[x] = value as f32;
-                        if let Some(t) = t_row.get_mut(x) {
-                            *t = triangle;
-                        }
-                        if let Some(bb) = b_row.get_mut(x) {
-                            *bb = st.mesh_bary(&wt).map(|v| v as f32);
-                        }
-                    }
-                    x = end;
-                }
-            });
+            .for_each_init(
+                Block::default,
+                |block, (y, (((c_row, d_row), t_row), b_row))| {
+                    pass.shade_row(block, y, c_row, d_row, t_row, b_row)
+                },
+            );
         Ok(())
-    }
-}
-
-/// Attributes at the three corners of a set-up (mesh barycentrics `B`, one row per corner):
-/// a pixel's attribute is `Σ_i w_i · (B a)_i` with the corner weights `w`, which equals
-/// `Σ_j bary_j a_j`.
-#[derive(Clone, Copy, Debug, Default)]
-struct CornerAttributes {
-    /// Camera-space vertex normals (not normalised).
-    normals: [[f32; 3]; 3],
-    /// Texel-space positions ([`Texture::texel_coords`]) for a textured albedo.
-    texel: [[f64; 2]; 3],
-    /// Vertex colours for a vertex-colour albedo.
-    color: [[f32; 3]; 3],
-}
-
-impl CornerAttributes {
-    fn new(
-        st: &ScreenTriangle,
-        mesh: &TriMesh,
-        normals: &[[f32; 3]],
-        albedo: &Albedo<'_>,
-    ) -> CornerAttributes {
-        // Indices were validated before rasterisation.
-        let t = mesh.triangles[st.triangle() as usize].map(|i| i as usize);
-        let bc = st.corner_bary();
-        let at_corners = |a: [[f32; 3]; 3]| -> [[f32; 3]; 3] {
-            std::array::from_fn(|i| {
-                std::array::from_fn(|c| {
-                    bc[i][0] * a[0][c] + bc[i][1] * a[1][c] + bc[i][2] * a[2][c]
-                })
-            })
-        };
-        let mut out = CornerAttributes {
-            normals: at_corners(t.map(|i| normals[i])),
-            ..CornerAttributes::default()
-        };
-        match albedo {
-            Albedo::Texture { texture, .. } => {
-                let uv = t.map(|i| mesh.uvs[i]);
-                out.texel = std::array::from_fn(|i| {
-                    let b = bc[i].map(f64::from);
-                    texture.texel_coords(std::array::from_fn(|c| {
-                        b[0] * uv[0][c] + b[1] * uv[1][c] + b[2] * uv[2][c]
-                    }))
-                });
-            }
-            Albedo::VertexColors => out.color = at_corners(t.map(|i| mesh.colors[i])),
-            Albedo::Constant(_) => {}
-        }
-        out
     }
 }

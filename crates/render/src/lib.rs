@@ -54,6 +54,7 @@
 pub mod camera;
 pub mod clip;
 pub mod color;
+mod deferred;
 pub mod depth;
 pub mod edge;
 mod error;

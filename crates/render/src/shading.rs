@@ -189,23 +189,6 @@ pub struct BlinnPhong {
     integer_shininess: Option<i32>,
 }
 
-/// `x^n` for `n ≥ 0` by binary exponentiation, inline (`f32::powi` is a call into
-/// compiler-builtins on x86-64; this is its algorithm, so the values agree).
-#[inline(always)]
-fn powi(mut x: f32, mut n: i32) -> f32 {
-    let mut r = 1.0;
-    loop {
-        if n & 1 != 0 {
-            r *= x;
-        }
-        n >>= 1;
-        if n == 0 {
-            return r;
-        }
-        x *= x;
-    }
-}
-
 /// Largest shininess evaluated by repeated multiplication.
 const MAX_INTEGER_SHININESS: f32 = 1024.0;
 
@@ -230,39 +213,116 @@ impl BlinnPhong {
         })
     }
 
-    /// Radiance of Eq. (6.4) (see [`blinn_phong`] for the conventions).
+    /// Radiance of Eq. (6.4) (see [`blinn_phong`] for the conventions) of the first `m` lanes
+    /// of `s` (`m ≤ LANES`), written over their albedo.
+    ///
+    /// Lane-parallel and branch-free: the specular cut-off becomes a mask and an integer
+    /// exponent is applied by squaring over the whole block, so the loops compile to SIMD code.
+    /// Per lane, the same operations in the same order as a scalar evaluation.
+    ///
+    /// # Panics
+    /// If `m > LANES`.
     #[inline(always)]
-    pub fn shade(&self, normal: [f32; 3], view: [f32; 3], albedo: [f32; 3]) -> [f32; 3] {
-        let (m, light) = (&self.material, &self.light);
+    pub(crate) fn shade_lanes(&self, s: &mut SurfaceLanes, m: usize) {
+        let (mt, light) = (&self.material, &self.light);
         let l = light.direction;
         let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        let n_dot_l = dot(normal, l).max(0.0);
-        let mut spec = 0.0;
-        if n_dot_l > 0.0 {
-            let h = [l[0] + view[0], l[1] + view[1], l[2] + view[2]];
+        let (n_dot_l, n_dot_h) = (&mut s.n_dot_l, &mut s.n_dot_h);
+        for k in 0..m {
+            let n = [s.normal[0][k], s.normal[1][k], s.normal[2][k]];
+            let v = [s.view[0][k], s.view[1][k], s.view[2][k]];
+            let ndl = dot(n, l).max(0.0);
+            let h = [l[0] + v[0], l[1] + v[1], l[2] + v[2]];
             let h_len = dot(h, h).sqrt();
-            if h_len > 0.0 {
-                let n_dot_h = (dot(normal, h) / h_len).clamp(0.0, 1.0);
-                if n_dot_h >= self.cos_cutoff {
-                    spec = m.ks
-                        * match self.integer_shininess {
-                            Some(a) => powi(n_dot_h, a),
-                            None => n_dot_h.powf(m.shininess),
-                        };
-                }
+            // NaN where `h_len = 0`, which fails the comparison below.
+            let ndh = (dot(n, h) / h_len).clamp(0.0, 1.0);
+            let lit = (ndl > 0.0) & (h_len > 0.0) & (ndh >= self.cos_cutoff);
+            n_dot_l[k] = ndl;
+            // `ν·h` where the lobe counts, else 0 (`0^α = 0` for `α ≥ 1`).
+            n_dot_h[k] = if lit { ndh } else { 0.0 };
+        }
+        // `(ν·h)^α` in place.
+        match self.integer_shininess {
+            Some(a) => powi_lanes(n_dot_h, m, a),
+            None => n_dot_h[..m]
+                .iter_mut()
+                .for_each(|x| *x = x.powf(mt.shininess)),
+        }
+        for c in 0..3 {
+            let (la, ld, ls) = (light.ambient[c], light.diffuse[c], light.specular[c]);
+            for (k, out) in s.albedo[c][..m].iter_mut().enumerate() {
+                *out = (mt.ka * la + mt.kd * n_dot_l[k] * ld) * *out + mt.ks * n_dot_h[k] * ls;
             }
         }
-        std::array::from_fn(|c| {
-            (m.ka * light.ambient[c] + m.kd * n_dot_l * light.diffuse[c]) * albedo[c]
-                + spec * light.specular[c]
-        })
     }
+}
+
+/// Pixels shaded together by [`BlinnPhong::shade_lanes`].
+pub(crate) const LANES: usize = 64;
+
+/// Surface samples in structure-of-arrays form (`[axis or channel][lane]`): unit normals `ν`,
+/// unit view vectors `v` (surface → eye) and albedos `C_tex`, as [`blinn_phong`] takes them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SurfaceLanes {
+    pub normal: [[f32; LANES]; 3],
+    pub view: [[f32; LANES]; 3],
+    /// Albedo in, radiance out ([`BlinnPhong::shade_lanes`]).
+    pub albedo: [[f32; LANES]; 3],
+    /// Scratch of [`BlinnPhong::shade_lanes`].
+    n_dot_l: [f32; LANES],
+    n_dot_h: [f32; LANES],
+}
+
+impl Default for SurfaceLanes {
+    fn default() -> Self {
+        SurfaceLanes {
+            normal: [[0.0; LANES]; 3],
+            view: [[0.0; LANES]; 3],
+            albedo: [[0.0; LANES]; 3],
+            n_dot_l: [0.0; LANES],
+            n_dot_h: [0.0; LANES],
+        }
+    }
+}
+
+/// `x^n` (`n ≥ 0`) of the first `m` lanes, in place, by binary exponentiation: one pass over
+/// the block per exponent bit. `f32::powi` is a call into compiler-builtins on x86-64; this is
+/// its algorithm, so the values agree.
+#[inline(always)]
+fn powi_lanes(x: &mut [f32; LANES], m: usize, mut n: i32) {
+    let mut r = [1.0f32; LANES];
+    loop {
+        if n & 1 != 0 {
+            for (r, x) in r[..m].iter_mut().zip(&x[..m]) {
+                *r *= x;
+            }
+        }
+        n >>= 1;
+        if n == 0 {
+            break;
+        }
+        for x in &mut x[..m] {
+            *x *= *x;
+        }
+    }
+    x[..m].copy_from_slice(&r[..m]);
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
+
+    /// [`BlinnPhong::shade_lanes`] of one sample, placed in a middle lane.
+    fn shade_one(s: &BlinnPhong, n: [f32; 3], v: [f32; 3], albedo: [f32; 3]) -> [f32; 3] {
+        let mut lanes = SurfaceLanes::default();
+        let k = LANES / 2 + 3;
+        for c in 0..3 {
+            (lanes.normal[c][k], lanes.view[c][k], lanes.albedo[c][k]) = (n[c], v[c], albedo[c]);
+        }
+        s.shade_lanes(&mut lanes, LANES);
+        lanes.albedo.map(|c| c[k])
+    }
 
     fn unit(rng: &mut impl Rng) -> [f32; 3] {
         loop {
@@ -296,7 +356,7 @@ mod tests {
             let albedo = std::array::from_fn(|_| rng.random_range(0.0..=1.0));
             let (n, v) = (unit(&mut rng), unit(&mut rng));
             let c = blinn_phong(&m, &light, n, v, albedo);
-            let fast = BlinnPhong::new(m, light).unwrap().shade(n, v, albedo);
+            let fast = shade_one(&BlinnPhong::new(m, light).unwrap(), n, v, albedo);
             for k in 0..3 {
                 assert!(
                     (fast[k] - c[k]).abs() <= SPECULAR_CUTOFF * 1.01,
@@ -327,11 +387,13 @@ mod tests {
     }
 
     #[test]
-    fn inline_powi_equals_the_builtin() {
+    fn lane_powi_equals_the_builtin() {
+        let x: [f32; LANES] = std::array::from_fn(|k| k as f32 / (LANES - 1) as f32);
         for n in [1, 2, 3, 7, 32, 100, 1024] {
-            for k in 0..=100 {
-                let x = k as f32 / 100.0;
-                assert_eq!(powi(x, n), x.powi(n), "{x}^{n}");
+            let mut r = x;
+            powi_lanes(&mut r, LANES, n);
+            for k in 0..LANES {
+                assert_eq!(r[k], x[k].powi(n), "{}^{n}", x[k]);
             }
         }
     }
