@@ -13,9 +13,13 @@ pub struct Edge {
     a: [f64; 2],
     d: [f64; 2],
     sign: f64,
-    /// Whether pixel centres exactly on the edge belong to this triangle (top-left rule).
-    owns_ties: bool,
+    /// The least `E` counted as inside: `0` when pixel centres exactly on the edge belong to this
+    /// triangle (top-left rule), else the least positive `f64` (so `E ≥ min_inside` ⟺ `E > 0`).
+    min_inside: f64,
 }
+
+/// The least positive `f64` (a subnormal; the renderer never flushes subnormals to zero).
+const LEAST_POSITIVE: f64 = f64::from_bits(1);
 
 impl Edge {
     /// The edge `a → b` of a triangle whose interior is on the side where `E > 0`.
@@ -36,7 +40,7 @@ impl Edge {
             a: ac,
             d: [bc[0] - ac[0], bc[1] - ac[1]],
             sign,
-            owns_ties,
+            min_inside: if owns_ties { 0.0 } else { LEAST_POSITIVE },
         }
     }
 
@@ -55,8 +59,15 @@ impl Edge {
     /// Whether a value `e = E(p)` puts `p` inside this edge's half-plane under the fill rule.
     #[inline(always)]
     pub fn inside(&self, e: f64) -> bool {
-        // Non-short-circuit `|`/`&`: no branches in the scan loop.
-        (e > 0.0) | ((e == 0.0) & self.owns_ties)
+        // `e > 0 ∨ (e = 0 ∧ owns ties)` in one comparison (false for NaN, true for −0 when the
+        // edge owns ties).
+        e >= self.min_inside
+    }
+
+    /// Whether pixel centres exactly on the edge belong to this triangle (top-left rule).
+    #[cfg(test)]
+    fn owns_ties(&self) -> bool {
+        self.min_inside == 0.0
     }
 }
 
@@ -80,13 +91,28 @@ mod tests {
             assert_eq!(e1.eval(e1.row(y), x), -e2.eval(e2.row(y), x));
         }
         assert_ne!(
-            e1.owns_ties, e2.owns_ties,
+            e1.owns_ties(),
+            e2.owns_ties(),
             "exactly one side owns centres on the edge"
         );
         let (h1, h2) = (
             Edge::new([0.0, 1.0], [5.0, 1.0]),
             Edge::new([5.0, 1.0], [0.0, 1.0]),
         );
-        assert_ne!(h1.owns_ties, h2.owns_ties, "also for horizontal edges");
+        assert_ne!(h1.owns_ties(), h2.owns_ties(), "also for horizontal edges");
+        // The one-comparison test agrees with its definition at the edge cases.
+        for e in [h1, h2, e1, e2] {
+            for v in [
+                0.0,
+                -0.0,
+                LEAST_POSITIVE,
+                -LEAST_POSITIVE,
+                1.0,
+                -1.0,
+                f64::NAN,
+            ] {
+                assert_eq!(e.inside(v), v > 0.0 || (v == 0.0 && e.owns_ties()), "{v}");
+            }
+        }
     }
 }

@@ -214,20 +214,8 @@ impl Rasterizer {
             .zip(self.index.par_chunks_mut(tile_len))
             .enumerate()
             .for_each(|(tile, (depth, index))| {
-                depth.fill(f32::INFINITY);
-                index.fill(NO_TRIANGLE);
                 let row0 = (tile * TILE_ROWS) as i32;
-                let row1 = row0 + (depth.len() / width as usize) as i32 - 1;
-                for &s in &bins[tile] {
-                    let st = &chunks[(s >> 16) as usize][(s & 0xffff) as usize];
-                    scan(st, row0.max(st.y0), row1.min(st.y1), |x, y, z| {
-                        let p = (y - row0) as usize * width as usize + x as usize;
-                        if z < depth[p] {
-                            depth[p] = z;
-                            index[p] = s;
-                        }
-                    });
-                }
+                scan_tile(chunks, &bins[tile], row0, width as usize, depth, index);
             });
         Ok(())
     }
@@ -335,6 +323,65 @@ impl ScreenTriangle {
     #[inline(always)]
     pub(crate) fn corner_bary(&self) -> &[[f32; 3]; 3] {
         &self.bary
+    }
+}
+
+/// Scan-converts the set-ups `bin` (ids into `chunks`) into one tile of the visibility buffer:
+/// `depth` and `index` hold whole image rows of `width` pixels from row `row0` on.
+///
+/// On x86-64 CPUs with AVX2 this is compiled a second time for them and chosen at run time;
+/// Rust never fuses or reorders floating-point operations, so coverage and depth are identical.
+fn scan_tile(
+    chunks: &[Vec<ScreenTriangle>],
+    bin: &[u32],
+    row0: i32,
+    width: usize,
+    depth: &mut [f32],
+    index: &mut [u32],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above).
+        unsafe { scan_tile_avx2(chunks, bin, row0, width, depth, index) };
+        return;
+    }
+    scan_tile_inline(chunks, bin, row0, width, depth, index);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn scan_tile_avx2(
+    chunks: &[Vec<ScreenTriangle>],
+    bin: &[u32],
+    row0: i32,
+    width: usize,
+    depth: &mut [f32],
+    index: &mut [u32],
+) {
+    scan_tile_inline(chunks, bin, row0, width, depth, index);
+}
+
+#[inline(always)]
+fn scan_tile_inline(
+    chunks: &[Vec<ScreenTriangle>],
+    bin: &[u32],
+    row0: i32,
+    width: usize,
+    depth: &mut [f32],
+    index: &mut [u32],
+) {
+    depth.fill(f32::INFINITY);
+    index.fill(NO_TRIANGLE);
+    let row1 = row0 + (depth.len() / width) as i32 - 1;
+    for &s in bin {
+        let st = &chunks[(s >> 16) as usize][(s & 0xffff) as usize];
+        scan(st, row0.max(st.y0), row1.min(st.y1), |x, y, z| {
+            let p = (y - row0) as usize * width + x as usize;
+            if z < depth[p] {
+                depth[p] = z;
+                index[p] = s;
+            }
+        });
     }
 }
 

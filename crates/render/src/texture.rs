@@ -226,20 +226,23 @@ impl Texture {
         };
         let (r0, r1) = ((j0 * w) as usize, (j1 * w) as usize);
         let (i0, i1) = (i0 as usize, i1 as usize);
-        let (t00, t10) = (self.texels[r0 + i0], self.texels[r0 + i1]);
-        let (t01, t11) = (self.texels[r1 + i0], self.texels[r1 + i1]);
         let s = 1.0 / TEXEL_MAX;
-        let (w00, w10, w01, w11) = (
-            (1.0 - fx) * (1.0 - fy) * s,
-            fx * (1.0 - fy) * s,
-            (1.0 - fx) * fy * s,
-            fx * fy * s,
-        );
-        // All four channels, although alpha is dropped: a 4-lane shape the compiler maps onto
-        // SIMD registers (one widening conversion and multiply-add per tap).
-        let rgba: [f32; 4] = std::array::from_fn(|c| {
-            w00 * t00[c] as f32 + w10 * t10[c] as f32 + w01 * t01[c] as f32 + w11 * t11[c] as f32
-        });
+        let taps = [
+            (r0 + i0, (1.0 - fx) * (1.0 - fy) * s),
+            (r0 + i1, fx * (1.0 - fy) * s),
+            (r1 + i0, (1.0 - fx) * fy * s),
+            (r1 + i1, fx * fy * s),
+        ];
+        // Tap by tap over all four channels, although alpha is dropped: a 4-lane shape the
+        // compiler maps onto one SIMD register (one widening conversion and multiply-add per
+        // tap). `0 + a` is exact, so the sum is `w₀₀t₀₀ + w₁₀t₁₀ + w₀₁t₀₁ + w₁₁t₁₁` in this order.
+        let mut rgba = [0.0f32; 4];
+        for (index, weight) in taps {
+            let texel = self.texels[index];
+            for c in 0..4 {
+                rgba[c] += weight * texel[c] as f32;
+            }
+        }
         [rgba[0], rgba[1], rgba[2]]
     }
 }
