@@ -9,6 +9,7 @@
 
 mod commands;
 mod exit;
+mod video_run;
 
 use std::process::ExitCode;
 
@@ -24,6 +25,13 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Video, image folder or image in, a fused metric face mesh per frame out (issue #6):
+    /// OUT/meshes/NNNNNN.ply, landmarks.json, metrics.json. Exit codes: 0 done; 2 bad input
+    /// (missing/corrupt input — a broken video keeps the frames before the break —,
+    /// intrinsics for another size, unwritable output, missing models); 1 internal error.
+    Run(commands::run::RunArgs),
+    /// The `run` pipeline without writing meshes, timed per stage: JSON on standard output.
+    Bench(commands::bench::BenchArgs),
     /// Reconstruct a mesh sequence from a folder of 16-bit PNG depth maps (paper §2, §4).
     Fuse(commands::fuse::FuseArgs),
     /// Time the factor-once solver at several mesh sizes and print JSON.
@@ -42,6 +50,8 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Run(args) => commands::run::run(args),
+        Command::Bench(args) => commands::bench::run(args),
         Command::Fuse(args) => commands::fuse::run(args),
         Command::BenchSolver(args) => commands::bench_solver::run(args),
         Command::Render(args) => commands::render::run(args),

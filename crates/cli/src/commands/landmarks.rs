@@ -124,7 +124,7 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
     write_json(args.out.as_deref(), &doc)
 }
 
-fn face_json(face: &Face) -> Value {
+pub(crate) fn face_json(face: &Face) -> Value {
     let r = |v: f32| (v as f64 * 1000.0).round() / 1000.0;
     json!({
         "score": r(face.score),
@@ -136,7 +136,7 @@ fn face_json(face: &Face) -> Value {
 
 /// Metric head pose: `X_cam = R · X_canonical + t` (camera coordinates, metres), the
 /// canonical face's axes in camera axes, Euler angles and the fit's reprojection error.
-fn pose_json(g: &FaceGeometry) -> Value {
+pub(crate) fn pose_json(g: &FaceGeometry) -> Value {
     let r = &g.pose.rotation;
     let deg = |v: f64| (v.to_degrees() * 100.0).round() / 100.0;
     // Z-Y-X (yaw about y, pitch about x, roll about z) of the rotation.

@@ -1,8 +1,10 @@
 //! One module per subcommand.
 
+pub mod bench;
 pub mod bench_solver;
 pub mod eval;
 pub mod fuse;
 pub mod landmarks;
 pub mod models;
 pub mod render;
+pub mod run;

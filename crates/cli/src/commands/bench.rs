@@ -1,0 +1,66 @@
+//! `visage bench`: the `visage run` pipeline without writing meshes or landmarks (decode,
+//! tracking, fit, depth and fusion all run, and the quality figures are measured), timed per
+//! stage; JSON on standard output and optionally in a file.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Args;
+use serde_json::json;
+use visage_face::{model_files, CanonicalMesh};
+
+use super::run::{check_input, execute, PipelineArgs};
+use crate::video_run::Output;
+
+/// Arguments of `visage bench`.
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    #[command(flatten)]
+    pub pipeline: PipelineArgs,
+    /// Also write the JSON to this file.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// Runs `visage bench`.
+pub fn run(args: BenchArgs) -> anyhow::Result<()> {
+    let p = &args.pipeline;
+    let start = Instant::now();
+    check_input(&p.input)?;
+    let models = p.models.clone().unwrap_or_else(model_files::models_dir);
+    let canonical = CanonicalMesh::load(&models)?;
+    let (outcome, params, k, vertices) = execute(p, &canonical, &models, Output::Nothing, start)?;
+    if let Some(e) = outcome.error {
+        return Err(e.context(format!(
+            "benchmark stopped after {} frames",
+            outcome.frames.len()
+        )));
+    }
+    let s = &outcome.summary;
+    let doc = json!({
+        "input": p.input.display().to_string(),
+        "width": k.width,
+        "height": k.height,
+        "parameters": params,
+        "mesh_vertices": vertices,
+        "writes_meshes": false,
+        "frames": s.frames,
+        "fps": s.fps,
+        "wall_s": s.wall_s,
+        "setup_ms": s.setup_ms,
+        "cpu_s": s.cpu_s,
+        "cpu_use": s.cpu_use,
+        "threads": std::thread::available_parallelism().map(|n| n.get()).ok(),
+        "peak_rss_mib": s.peak_rss_mib,
+        "detector_runs": s.detector_runs,
+        "stages_ms": s.stages,
+        "quality": s.quality,
+    });
+    let text = serde_json::to_string_pretty(&doc)?;
+    println!("{text}");
+    if let Some(path) = &args.out {
+        std::fs::write(path, &text).with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,324 @@
+//! `visage run` and `visage bench` as a user runs them, on a real clip: outputs per frame, both
+//! mesh designs, clip mode, and the bad inputs of issue #6 (missing input, truncated video, a
+//! frame without a face, intrinsics for another size, unwritable output). Needs the model files
+//! (`scripts/setup.sh`), FFmpeg and `../shared`; skipped visibly without them.
+
+mod common;
+
+use common::{run_ok, s, visage};
+
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The model folder and the 480×480 sample clip, or `None` (with a SKIPPED line).
+fn inputs() -> Option<(PathBuf, PathBuf)> {
+    let models =
+        std::env::var_os("VISAGE_MODELS").map_or_else(|| repo().join("models"), PathBuf::from);
+    if !visage_face::model_files::models_present(&models) {
+        eprintln!(
+            "SKIPPED: model files not found in {} (run scripts/setup.sh)",
+            models.display()
+        );
+        return None;
+    }
+    let clip = repo().join("../shared/data/video/lp_d18.mp4");
+    if !clip.exists() {
+        eprintln!("SKIPPED: ../shared/data/video/lp_d18.mp4 not found");
+        return None;
+    }
+    if !visage_video::ffmpeg_available() {
+        eprintln!("SKIPPED: FFmpeg not installed");
+        return None;
+    }
+    Some((models, clip))
+}
+
+fn json(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn ply_count(dir: &Path) -> usize {
+    std::fs::read_dir(dir).map_or(0, |d| {
+        d.filter(|e| {
+            e.as_ref()
+                .is_ok_and(|e| e.path().extension().is_some_and(|x| x == "ply"))
+        })
+        .count()
+    })
+}
+
+#[test]
+fn a_short_clip_gives_a_mesh_landmarks_and_metrics_per_frame() {
+    let Some((models, clip)) = inputs() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    run_ok(&[
+        "run",
+        s(&clip),
+        "--out",
+        s(&out),
+        "--max-frames",
+        "8",
+        "--save-raw",
+        "--quiet",
+        "--models",
+        s(&models),
+    ]);
+    assert_eq!(ply_count(&out.join("meshes")), 8);
+    assert_eq!(ply_count(&out.join("raw")), 8);
+    let mesh = visage_mesh::io::read_ply(&out.join("meshes/000007.ply")).unwrap();
+    // Metres in camera coordinates: a face 0.2–2 m in front of the camera.
+    let z = mesh.vertices.iter().map(|v| v[2]).sum::<f64>() / mesh.vertices.len() as f64;
+    assert!((0.2..2.0).contains(&z), "mean z {z}");
+    let lm = json(&out.join("landmarks.json"));
+    assert_eq!(lm["frames"].as_array().unwrap().len(), 8);
+    assert_eq!(
+        lm["frames"][3]["faces"][0]["landmarks"]
+            .as_array()
+            .unwrap()
+            .len(),
+        468
+    );
+    let m = json(&out.join("metrics.json"));
+    assert_eq!(m["status"], "complete");
+    let frames = m["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 8);
+    for f in frames {
+        assert_eq!(f["status"], "solved");
+        for stage in ["decode", "track", "fit", "depth", "fuse", "write"] {
+            assert!(f["ms"][stage].as_f64().unwrap() >= 0.0, "{stage}");
+        }
+        assert!(f["relative_residual"].as_f64().unwrap() < 1e-6);
+        assert!(f["pose"]["yaw_deg"].is_number());
+        assert!(f["roughness"].as_f64().unwrap() > 0.0);
+    }
+    let summary = &m["summary"];
+    assert_eq!(summary["frames"], 8);
+    assert!(summary["fps"].as_f64().unwrap() > 0.0);
+    assert!(summary["stages"]["track"]["p95_ms"].as_f64().unwrap() > 0.0);
+    let q = &summary["quality"];
+    assert_eq!(q["pairs"], 7);
+    let (fused, raw) = (
+        q["vertex_jitter_mm"]["fused"].as_f64().unwrap(),
+        q["vertex_jitter_mm"]["raw"].as_f64().unwrap(),
+    );
+    assert!(fused > 0.0 && fused < raw, "fused {fused} raw {raw}");
+    assert!(q["reprojection_px"]["fused"].as_f64().unwrap() < 5.0);
+}
+
+#[test]
+fn image_mesh_and_clip_mode_run() {
+    let Some((models, clip)) = inputs() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    for (name, extra) in [("image", ["--mesh", "image"]), ("clip", ["--mode", "clip"])] {
+        let out = tmp.path().join(name);
+        let mut args = vec![
+            "run",
+            s(&clip),
+            "--out",
+            s(&out),
+            "--max-frames",
+            "5",
+            "--quiet",
+            "--models",
+            s(&models),
+        ];
+        args.extend(extra);
+        run_ok(&args);
+        assert_eq!(ply_count(&out.join("meshes")), 5, "{name}");
+        let m = json(&out.join("metrics.json"));
+        assert_eq!(m["status"], "complete", "{name}");
+        let lj = &m["summary"]["quality"]["landmark_jitter_mm"];
+        assert!(lj["fused"].as_f64().unwrap() > 0.0, "{name}: {lj}");
+    }
+}
+
+#[test]
+fn bench_prints_stage_percentiles() {
+    let Some((models, clip)) = inputs() else {
+        return;
+    };
+    let o = visage(&[
+        "bench",
+        s(&clip),
+        "--max-frames",
+        "4",
+        "--quiet",
+        "--models",
+        s(&models),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["frames"], 4);
+    assert_eq!(j["writes_meshes"], false);
+    assert!(j["stages_ms"]["fuse"]["median_ms"].as_f64().unwrap() > 0.0);
+    assert!(j["peak_rss_mib"].as_f64().unwrap() > 1.0);
+}
+
+#[test]
+fn a_missing_input_is_exit_2_naming_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let missing = tmp.path().join("nope.mp4");
+    let o = visage(&["run", s(&missing), "--out", s(&tmp.path().join("o"))]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("nope.mp4"));
+}
+
+#[test]
+fn a_truncated_video_keeps_the_readable_frames_and_names_the_break() {
+    let Some((models, clip)) = inputs() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    // The first 24 frames with the index up front (faststart), cut in the middle of the data.
+    let full = tmp.path().join("full.mp4");
+    let status = std::process::Command::new("ffmpeg")
+        .args([
+            "-v",
+            "error",
+            "-y",
+            "-i",
+            s(&clip),
+            "-frames:v",
+            "24",
+            "-an",
+        ])
+        .args([
+            "-c:v",
+            "libx264",
+            "-g",
+            "4",
+            "-bf",
+            "0",
+            "-movflags",
+            "+faststart",
+        ])
+        .arg(&full)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let bytes = std::fs::read(&full).unwrap();
+    let cut = tmp.path().join("cut.mp4");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let out = tmp.path().join("out");
+    let o = visage(&[
+        "run",
+        s(&cut),
+        "--out",
+        s(&out),
+        "--quiet",
+        "--models",
+        s(&models),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("cut.mp4") && err.contains("broke at frame"),
+        "{err}"
+    );
+    let m = json(&out.join("metrics.json"));
+    assert_eq!(m["status"], "failed");
+    assert!(m["error"].as_str().unwrap().contains("broke at frame"));
+    let done = m["frames"].as_array().unwrap().len();
+    assert!(done > 0 && done < 24, "{done} frames");
+    assert_eq!(ply_count(&out.join("meshes")), done);
+    assert_eq!(
+        json(&out.join("landmarks.json"))["frames"]
+            .as_array()
+            .unwrap()
+            .len(),
+        done
+    );
+}
+
+#[test]
+fn a_frame_without_a_face_gets_no_mesh_and_tracking_reacquires() {
+    let Some((models, clip)) = inputs() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("frames");
+    std::fs::create_dir(&dir).unwrap();
+    let source = visage_video::FrameSource::open(&clip).unwrap();
+    for (i, frame) in source.take(4).enumerate() {
+        let image = frame.unwrap().image;
+        image.save(dir.join(format!("f{i}.png"))).unwrap();
+        if i == 1 {
+            let black = image::RgbImage::new(image.width(), image.height());
+            black.save(dir.join("f1_black.png")).unwrap();
+        }
+    }
+    let out = tmp.path().join("out");
+    run_ok(&[
+        "run",
+        s(&dir),
+        "--out",
+        s(&out),
+        "--quiet",
+        "--models",
+        s(&models),
+    ]);
+    let m = json(&out.join("metrics.json"));
+    let status: Vec<&str> = m["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["status"].as_str().unwrap())
+        .collect();
+    assert_eq!(status, ["solved", "solved", "no_face", "solved", "solved"]);
+    assert_eq!(m["summary"]["no_face"], 1);
+    assert!(!out.join("meshes/000002.ply").exists());
+    assert!(out.join("meshes/000003.ply").exists());
+}
+
+#[test]
+fn intrinsics_for_another_size_are_exit_2_naming_the_file() {
+    let Some((models, clip)) = inputs() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let cam = tmp.path().join("cam.json");
+    std::fs::write(
+        &cam,
+        r#"{"width": 640, "height": 480, "fx": 525.0, "fy": 525.0, "cx": 319.5, "cy": 239.5}"#,
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let o = visage(&[
+        "run",
+        s(&clip),
+        "--out",
+        s(&out),
+        "--intrinsics",
+        s(&cam),
+        "--models",
+        s(&models),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("cam.json") && err.contains("480"), "{err}");
+}
+
+#[test]
+fn an_unwritable_output_folder_is_exit_2() {
+    let Some((models, clip)) = inputs() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("a_file");
+    std::fs::write(&file, b"x").unwrap();
+    let out = file.join("out");
+    let o = visage(&["run", s(&clip), "--out", s(&out), "--models", s(&models)]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("a_file"), "{err}");
+}
