@@ -41,20 +41,21 @@ fi
 
 [ "$mode" = ci ] && exit 0
 
-# The main job on a sample: face-CNN depth from a real clip, fused into a stable mesh sequence,
-# and a shaded preview of one frame.
+# The main job on a sample: `visage run` on a real clip → a fused metric face mesh per frame, and
+# shaded previews of a few frames (fused and raw) a person can open.
 video=../shared/data/video/lp_d18.mp4
 if [ ! -f "$video" ]; then
-  echo "setup: done. No sample clip ($video); try: $bin landmarks YOUR.mp4 --depth-out depth/ && $bin fuse --depth depth/ --out fused/"
+  echo "setup: done. No sample clip ($video: ../shared is absent); try: $bin run YOUR.mp4 --out out/run"
   exit 0
 fi
 out=out/sample
 rm -rf "$out" && mkdir -p "$out"
-"$bin" landmarks "$video" --out "$out/landmarks.json" --depth-out "$out/depth"
-"$bin" fuse --depth "$out/depth" --out "$out/fused" --save-raw
-# The clip is 480×480; landmarks and fuse both assume a 60° horizontal field of view.
+"$bin" run "$video" --out "$out" --save-raw
+# The clip is 480×480; `visage run` assumes a 60° horizontal field of view (the default).
 awk 'BEGIN { f = 240 / (sin(0.5235987756) / cos(0.5235987756));
   printf "{\"width\": 480, \"height\": 480, \"fx\": %.6f, \"fy\": %.6f, \"cx\": 239.5, \"cy\": 239.5}\n", f, f }' > "$out/camera.json"
-"$bin" render "$out/fused/meshes/000100.ply" --intrinsics "$out/camera.json" --out "$out/preview_fused.png"
-"$bin" render "$out/fused/raw/000100.ply" --intrinsics "$out/camera.json" --out "$out/preview_raw.png"
-echo "setup: sample written to $out/ (meshes in fused/meshes, metrics in fused/metrics.json, previews *.png)"
+for frame in 000000 000060 000120 000180; do
+  "$bin" render "$out/meshes/$frame.ply" --intrinsics "$out/camera.json" --out "$out/preview_$frame.png"
+  "$bin" render "$out/raw/$frame.ply" --intrinsics "$out/camera.json" --out "$out/preview_${frame}_raw.png"
+done
+echo "setup: sample written to $out/ (meshes/*.ply, metrics.json, landmarks.json, previews preview_*.png)"
