@@ -13,6 +13,7 @@ mod depth_map;
 mod depth_png;
 mod error;
 mod intrinsics;
+mod rigid_fit;
 mod rigid_transform;
 
 pub use depth_kind::DepthKind;
@@ -20,4 +21,5 @@ pub use depth_map::DepthMap;
 pub use depth_png::{read_depth_png, write_depth_png};
 pub use error::CameraError;
 pub use intrinsics::{Intrinsics, DEFAULT_FOV_DEG};
+pub use rigid_fit::{horn_rotation, quaternion_to_matrix};
 pub use rigid_transform::RigidTransform;

@@ -240,6 +240,7 @@ fn face_anchored(
     let n = a.domain.vertex_count();
     let (mut solutions, mut raw) = (Vec::new(), Vec::new());
     let (mut bs, mut xs, mut members) = (Vec::new(), Vec::new(), Vec::new());
+    let mut poses = Vec::new();
     let start = Instant::now();
     for (index, depth) in input.frames.iter().enumerate() {
         let r = fuser.process(&AnchoredFrame {
@@ -258,13 +259,14 @@ fn face_anchored(
         if clip.is_some() && r.status == FrameStatus::Solved {
             bs.push(fuser.rhs().to_owned());
             xs.push(fuser.solution_head().to_owned());
+            poses.push(*fuser.pose());
             members.push(index);
         }
     }
     if let Some(options) = clip {
         solve_clip(fuser.solver_mut().system_mut(), &bs, &mut xs, options);
-        for (x, &i) in xs.iter().zip(&members) {
-            fuser.set_solution_head(x, a.tracking.poses[i]);
+        for ((x, &i), pose) in xs.iter().zip(&members).zip(&poses) {
+            fuser.set_solution_head(x, *pose);
             solutions[i] = to_mat(fuser.solution());
         }
     }

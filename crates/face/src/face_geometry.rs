@@ -18,7 +18,7 @@
 //!   motion are kept in the image plane) and carry the fitted metric depth; this is the mesh
 //!   that [`crate::face_depth`] rasterises.
 
-use visage_camera::{Intrinsics, RigidTransform};
+use visage_camera::{horn_rotation, quaternion_to_matrix, Intrinsics, RigidTransform};
 
 use crate::{CanonicalMesh, FaceError, NUM_LANDMARKS};
 
@@ -219,34 +219,7 @@ fn similarity_procrustes(
             }
         }
     }
-    let n = [
-        [
-            s[0][0] + s[1][1] + s[2][2],
-            s[1][2] - s[2][1],
-            s[2][0] - s[0][2],
-            s[0][1] - s[1][0],
-        ],
-        [
-            s[1][2] - s[2][1],
-            s[0][0] - s[1][1] - s[2][2],
-            s[0][1] + s[1][0],
-            s[2][0] + s[0][2],
-        ],
-        [
-            s[2][0] - s[0][2],
-            s[0][1] + s[1][0],
-            -s[0][0] + s[1][1] - s[2][2],
-            s[1][2] + s[2][1],
-        ],
-        [
-            s[0][1] - s[1][0],
-            s[2][0] + s[0][2],
-            s[1][2] + s[2][1],
-            -s[0][0] - s[1][1] + s[2][2],
-        ],
-    ];
-    let qt = top_eigenvector4(n);
-    let r = quaternion_to_matrix(qt);
+    let r = horn_rotation(&s);
     // σ = Σ w bᵀ R a / Σ w |a|².
     let mut num = 0.0;
     for &(i, w) in basis {
@@ -257,77 +230,6 @@ fn similarity_procrustes(
         }
     }
     (num / pp, r)
-}
-
-/// Eigenvector of the largest eigenvalue of a symmetric 4×4 matrix (cyclic Jacobi).
-#[allow(clippy::needless_range_loop)]
-fn top_eigenvector4(mut a: [[f64; 4]; 4]) -> [f64; 4] {
-    let mut v = [[0.0; 4]; 4];
-    for (i, row) in v.iter_mut().enumerate() {
-        row[i] = 1.0;
-    }
-    for _ in 0..50 {
-        let off: f64 = (0..4)
-            .flat_map(|i| (0..4).filter(move |&j| j != i).map(move |j| (i, j)))
-            .map(|(i, j)| a[i][j] * a[i][j])
-            .sum();
-        if off < 1e-30 {
-            break;
-        }
-        for p in 0..3 {
-            for q in p + 1..4 {
-                if a[p][q].abs() < 1e-300 {
-                    continue;
-                }
-                let theta = 0.5 * (a[q][q] - a[p][p]) / a[p][q];
-                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-                let t = if theta == 0.0 { 1.0 } else { t };
-                let c = 1.0 / (t * t + 1.0).sqrt();
-                let s = t * c;
-                for k in 0..4 {
-                    let (akp, akq) = (a[k][p], a[k][q]);
-                    a[k][p] = c * akp - s * akq;
-                    a[k][q] = s * akp + c * akq;
-                }
-                for k in 0..4 {
-                    let (apk, aqk) = (a[p][k], a[q][k]);
-                    a[p][k] = c * apk - s * aqk;
-                    a[q][k] = s * apk + c * aqk;
-                }
-                for row in v.iter_mut() {
-                    let (vp, vq) = (row[p], row[q]);
-                    row[p] = c * vp - s * vq;
-                    row[q] = s * vp + c * vq;
-                }
-            }
-        }
-    }
-    let best = (0..4)
-        .max_by(|&i, &j| a[i][i].total_cmp(&a[j][j]))
-        .unwrap_or(0);
-    std::array::from_fn(|k| v[k][best])
-}
-
-fn quaternion_to_matrix(q: [f64; 4]) -> [[f64; 3]; 3] {
-    let n = (q.iter().map(|v| v * v).sum::<f64>()).sqrt().max(1e-300);
-    let [w, x, y, z] = q.map(|v| v / n);
-    [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-        ],
-        [
-            2.0 * (x * y + w * z),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - w * x),
-        ],
-        [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            1.0 - 2.0 * (x * x + y * y),
-        ],
-    ]
 }
 
 /// Rodrigues' formula.

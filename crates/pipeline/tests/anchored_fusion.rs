@@ -310,3 +310,30 @@ fn malformed_frames_are_refused() {
     )
     .is_err());
 }
+
+/// A face 10 % larger than the template: the landmark fit (template size) places it 10 % too
+/// close; the depth maps measure the scale and the fused surface lands on the real face.
+#[test]
+fn the_face_scale_is_measured_from_depth_maps() {
+    let (v, t) = template(false);
+    let mut f = fuser(&v, &t, 2, 10.0, 0.5);
+    let big: Vec<[f64; 3]> = v.iter().map(|p| p.map(|c| 1.1 * c)).collect();
+    let mut truth = vec![[0.0; 3]; f.domain().vertex_count()];
+    for k in 0..8 {
+        let p = pose(0.05 * k as f64, 0.002 * k as f64);
+        let (clean, px) = observe(&big, &p);
+        let mut fitted = p;
+        fitted.translation = p.translation.map(|c| c / 1.1);
+        let depth = plane_depth(&p, |_, _| false);
+        f.process(&AnchoredFrame {
+            landmarks_px: &px,
+            pose: fitted,
+            depth: FrameDepth::Map(&depth),
+        })
+        .unwrap();
+        assert!((f.scale() - 1.1).abs() < 1e-4, "scale {}", f.scale());
+        f.domain().interpolate(&clean, &mut truth);
+        let d = max_distance(f.solution(), &truth);
+        assert!(d < 2e-4, "frame {k}: {d} m");
+    }
+}
