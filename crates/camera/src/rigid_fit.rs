@@ -48,7 +48,7 @@ impl RigidTransform {
                 cb[k] += w * b[k];
             }
         }
-        if !(wsum > 0.0) {
+        if wsum.is_nan() || wsum <= 0.0 {
             return None;
         }
         let (ca, cb) = (ca.map(|v| v / wsum), cb.map(|v| v / wsum));
