@@ -3,17 +3,14 @@
 //! the first — the issue #6 acceptance measure ("RMS of frame-to-frame vertex motion after
 //! removing the head's rigid motion").
 //!
-//! Alignment is the unweighted least-squares rotation and translation (Kabsch 1976; solved as
-//! in Horn 1987, "Closed-form solution of absolute orientation using unit quaternions",
-//! J. Opt. Soc. Am. A 4(4)): with centred points `a_i`, `b_i` and `S = Σ a_i b_iᵀ`, the
-//! minimal squared residual is `Σ|a_i|² + Σ|b_i|² − 2 λ_max(N(S))`, `N` Horn's symmetric 4×4
-//! matrix (Eq. 32 of the paper) — no rotation needs to be formed.
+//! Alignment is the unweighted least-squares rotation and translation (Kabsch 1976), solved by
+//! Horn's closed form in [`visage_camera::RigidTransform::fit`].
 
-use faer::{Mat, Side};
+use visage_camera::RigidTransform;
 
 /// RMS residual distance (units of the input) between `a` and `b` after the best rigid motion
 /// of `b` onto `a`. Pairs where either point is not finite (a point missing in one frame) are
-/// left out. `None` for fewer than 3 pairs or a failed eigen-decomposition.
+/// left out. `None` for fewer than 3 pairs.
 ///
 /// # Panics
 /// If `a` and `b` differ in length.
@@ -26,59 +23,14 @@ pub fn rigid_residual_rms(a: &[[f64; 3]], b: &[[f64; 3]]) -> Option<f64> {
     if n < 3 {
         return None;
     }
-    let (mut ca, mut cb) = ([0.0; 3], [0.0; 3]);
-    for (p, q) in pairs() {
-        for c in 0..3 {
-            ca[c] += p[c] / n as f64;
-            cb[c] += q[c] / n as f64;
-        }
-    }
-    let mut s = [[0.0f64; 3]; 3];
-    let mut squares = 0.0;
-    for (p, q) in pairs() {
-        let x: [f64; 3] = std::array::from_fn(|c| p[c] - ca[c]);
-        let y: [f64; 3] = std::array::from_fn(|c| q[c] - cb[c]);
-        squares += x.iter().chain(&y).map(|v| v * v).sum::<f64>();
-        for (r, row) in s.iter_mut().enumerate() {
-            for (c, v) in row.iter_mut().enumerate() {
-                *v += x[r] * y[c];
-            }
-        }
-    }
-    let horn = [
-        [
-            s[0][0] + s[1][1] + s[2][2],
-            s[1][2] - s[2][1],
-            s[2][0] - s[0][2],
-            s[0][1] - s[1][0],
-        ],
-        [
-            s[1][2] - s[2][1],
-            s[0][0] - s[1][1] - s[2][2],
-            s[0][1] + s[1][0],
-            s[2][0] + s[0][2],
-        ],
-        [
-            s[2][0] - s[0][2],
-            s[0][1] + s[1][0],
-            -s[0][0] + s[1][1] - s[2][2],
-            s[1][2] + s[2][1],
-        ],
-        [
-            s[0][1] - s[1][0],
-            s[2][0] + s[0][2],
-            s[1][2] + s[2][1],
-            -s[0][0] - s[1][1] + s[2][2],
-        ],
-    ];
-    let eigenvalues = Mat::from_fn(4, 4, |i, j| horn[i][j])
-        .self_adjoint_eigenvalues(Side::Lower)
-        .ok()?;
-    let top = eigenvalues
-        .iter()
-        .copied()
-        .fold(f64::NEG_INFINITY, f64::max);
-    Some(((squares - 2.0 * top).max(0.0) / n as f64).sqrt())
+    let fit = RigidTransform::fit(pairs().map(|(p, q)| (*q, *p, 1.0)))?;
+    let squares: f64 = pairs()
+        .map(|(p, q)| {
+            let m = fit.apply(*q);
+            (0..3).map(|c| (m[c] - p[c]).powi(2)).sum::<f64>()
+        })
+        .sum();
+    Some((squares / n as f64).sqrt())
 }
 
 /// Running mean of the rigid-aligned jitter over consecutive frames of one surface.
