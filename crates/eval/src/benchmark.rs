@@ -27,13 +27,11 @@ pub const TUNING_SALT: u64 = 0x7a_0b1e_5eed;
 const NOISE_SALT: u64 = 0x0015_e5ee_d000;
 /// Salt of a sequence's simulated-tracker stream.
 const TRACKER_SALT: u64 = 0x7_2ac4_e5ee_d000;
-/// λ (mm⁴ of the canonical face) and μ of the face-anchored fusion in the benchmark: the best
-/// RMSE of a λ × μ sweep on a separate seed (ARCHITECTURE.md, benchmark section). Not
-/// `Weights::default()`, which is the image-plane fusion's (λ in reference pixels⁴).
-pub const ANCHORED_WEIGHTS: Weights = Weights {
-    lambda: 100.0,
-    mu: 1.0,
-};
+/// λ (mm⁴ of the canonical face) and μ of the face-anchored fusion in the benchmark: the
+/// pipeline's default for depth maps, the best RMSE of a λ × μ sweep on a separate seed
+/// (ARCHITECTURE.md, benchmark section). Not `Weights::default()`, which is the image-plane
+/// fusion's (λ in reference pixels⁴).
+pub const ANCHORED_WEIGHTS: Weights = visage_pipeline::ANCHORED_WEIGHTS_MAP;
 /// Subdivision of the canonical FaceMesh for the face-anchored mesh in the benchmark.
 pub const ANCHORED_SUBDIVISION: usize = 2;
 /// Fewest domain pixels a sequence must leave to be meshed.

@@ -62,6 +62,23 @@ use crate::{FaceDomain, FrameStatus, PipelineError};
 /// Template coordinates (metres) → finite-element domain coordinates (millimetres).
 pub const DOMAIN_UNITS_PER_METRE: f64 = 1000.0;
 
+/// Default λ (mm⁴) and μ of the face-anchored fusion on the face CNN's surface. That surface is
+/// already smooth (planar over each FaceMesh triangle), so λ only pulls the landmarks towards
+/// the template; μ trades jitter against lag. On the two real clips λ = 1, μ = 0.5 keep the
+/// landmarks within 0.41 px of the tracked ones (`visage bench`, ARCHITECTURE.md).
+pub const ANCHORED_WEIGHTS_FACE: Weights = Weights {
+    lambda: 1.0,
+    mu: 0.5,
+};
+
+/// Default λ (mm⁴) and μ of the face-anchored fusion on depth maps (a sensor, a depth network):
+/// the best RMSE of the ground-truth benchmark's sweep with CNN-like depth noise
+/// (`visage eval synthetic --sweep-method face_anchored`).
+pub const ANCHORED_WEIGHTS_MAP: Weights = Weights {
+    lambda: 10.0,
+    mu: 1.0,
+};
+
 /// Weight of a frame's scale measurement in the face's running scale (an exponential moving
 /// average; see [`AnchoredFuser::scale`]). The landmark fit's distance drifts with the head's
 /// yaw when the face's shape differs from the template (up to 9 % over 24 frames on the

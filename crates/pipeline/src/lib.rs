@@ -12,7 +12,8 @@ mod fusion_setup;
 mod report;
 
 pub use anchored_fuser::{
-    AnchoredFrame, AnchoredFuser, AnchoredResult, FrameDepth, DOMAIN_UNITS_PER_METRE,
+    AnchoredFrame, AnchoredFuser, AnchoredResult, FrameDepth, ANCHORED_WEIGHTS_FACE,
+    ANCHORED_WEIGHTS_MAP, DOMAIN_UNITS_PER_METRE, SCALE_SMOOTHING,
 };
 pub use atomic_write::write_atomically;
 pub use depth_sequence::{DepthSequence, SequenceSurvey, DOMAIN_MAJORITY};

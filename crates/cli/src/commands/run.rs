@@ -19,7 +19,8 @@ use visage_face::{model_files, CanonicalMesh, FaceMesh, FaceTracker};
 use visage_fem::{ClipOptions, Weights};
 use visage_mesh::io::PlyFormat;
 use visage_pipeline::{
-    write_atomically, DepthSequence, MeshingOptions, PipelineError, DEFAULT_MAX_DEPTH_M,
+    write_atomically, DepthSequence, MeshingOptions, PipelineError, ANCHORED_WEIGHTS_FACE,
+    ANCHORED_WEIGHTS_MAP, DEFAULT_MAX_DEPTH_M,
 };
 use visage_video::{is_image_path, read_image, FrameSource};
 
@@ -63,13 +64,13 @@ pub struct PipelineArgs {
     /// PNG depth maps (millimetres, z), the i-th file for input frame i.
     #[arg(long, default_value = "face")]
     pub depth: String,
-    /// Smoothness weight λ (face mesh: mm⁴ of the canonical face; image mesh: reference
-    /// pixels⁴).
-    #[arg(long, default_value_t = Weights::default().lambda, allow_hyphen_values = true)]
-    pub lambda: f64,
-    /// Temporal weight μ (dimensionless).
-    #[arg(long, default_value_t = Weights::default().mu, allow_hyphen_values = true)]
-    pub mu: f64,
+    /// Smoothness weight λ (face mesh: mm⁴ of the canonical face, default 1 with the face
+    /// depth and 10 with depth maps; image mesh: reference pixels⁴, default 10).
+    #[arg(long, allow_hyphen_values = true)]
+    pub lambda: Option<f64>,
+    /// Temporal weight μ (dimensionless; default 0.5, face mesh with depth maps 1).
+    #[arg(long, allow_hyphen_values = true)]
+    pub mu: Option<f64>,
     /// Mesh design.
     #[arg(long, value_enum, default_value = "face")]
     pub mesh: MeshArg,
@@ -226,9 +227,14 @@ pub fn execute(
     output: Output,
     start: Instant,
 ) -> anyhow::Result<(RunOutcome, FusionParams, Intrinsics, usize)> {
+    let defaults = match (p.mesh, p.depth.as_str()) {
+        (MeshArg::Face, "face") => ANCHORED_WEIGHTS_FACE,
+        (MeshArg::Face, _) => ANCHORED_WEIGHTS_MAP,
+        (MeshArg::Image, _) => Weights::default(),
+    };
     let weights = Weights {
-        lambda: p.lambda,
-        mu: p.mu,
+        lambda: p.lambda.unwrap_or(defaults.lambda),
+        mu: p.mu.unwrap_or(defaults.mu),
     };
     weights.validate().context("invalid --lambda/--mu")?;
     if p.every == 0 {
