@@ -257,7 +257,7 @@ mod tests {
     #[test]
     fn flags_become_a_validated_config() {
         let c = config(&args()).unwrap();
-        assert_eq!((c.sequences, c.synthesis.frames, c.seed), (1, 20, 3));
+        assert_eq!((c.sequences, c.synthesis.frames, c.seed), (3, 20, 3));
         assert_eq!((c.weights.lambda, c.weights.mu), (1.0, 2.0));
         assert_eq!(
             (c.anchored_weights.lambda, c.anchored_weights.mu),
