@@ -173,9 +173,9 @@ impl MetricAccumulator {
 /// The ground truth of one vertex set over a sequence.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VertexTruth {
-    /// [frame][vertex]: whether the vertex is in the face set F_k.
+    /// `[frame][vertex]`: whether the vertex is in the face set F_k.
     pub face: Vec<Vec<bool>>,
-    /// [frame][vertex]: GT camera-space point the vertex stands for, metres.
+    /// `[frame][vertex]`: GT camera-space point the vertex stands for, metres.
     pub points: Vec<Vec<Option<[f64; 3]>>>,
 }
 
