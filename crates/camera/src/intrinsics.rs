@@ -43,6 +43,29 @@ impl Intrinsics {
         Ok(k)
     }
 
+    /// Square pixels, principal point at the image centre, and the 35 mm-equivalent focal
+    /// length `f35_mm` (EXIF `FocalLengthIn35mmFilm`): the image diagonal maps to the 35 mm
+    /// frame's diagonal (43.27 mm), so `f = f35 · diagonal_px / 43.27`, whatever the aspect.
+    pub fn from_focal_35mm(width: u32, height: u32, f35_mm: f64) -> Result<Self, CameraError> {
+        if !(f35_mm.is_finite() && f35_mm > 0.0) {
+            return Err(CameraError::InvalidIntrinsics {
+                field: "focal_length_35mm",
+                value: f35_mm,
+                reason: "must be positive",
+            });
+        }
+        let diagonal_px = (width as f64).hypot(height as f64);
+        let f = f35_mm * diagonal_px / 36.0f64.hypot(24.0);
+        Self::new(
+            width,
+            height,
+            f,
+            f,
+            0.5 * (width as f64 - 1.0),
+            0.5 * (height as f64 - 1.0),
+        )
+    }
+
     /// Square pixels, principal point at the image centre, horizontal field of view `fov_deg`:
     /// `fx = fy = (width / 2) / tan(fov / 2)`.
     pub fn from_fov(width: u32, height: u32, fov_deg: f64) -> Result<Self, CameraError> {
@@ -168,6 +191,19 @@ impl Intrinsics {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_35mm_focal_length_maps_the_diagonal() {
+        // 36 × 24 px "sensor" with f35 = 43.27 mm: f equals the diagonal in pixels.
+        let k = Intrinsics::from_focal_35mm(3600, 2400, 36.0f64.hypot(24.0)).unwrap();
+        assert!((k.fx - 3600.0f64.hypot(2400.0)).abs() < 1e-9 && k.fx == k.fy);
+        // A 50 mm lens on a 3:2 frame: horizontal field of view 39.6°.
+        let k = Intrinsics::from_focal_35mm(1500, 1000, 50.0).unwrap();
+        let fov = 2.0 * (750.0 / k.fx).atan().to_degrees();
+        assert!((fov - 39.6).abs() < 0.05, "{fov}");
+        assert!(Intrinsics::from_focal_35mm(10, 10, 0.0).is_err());
+        assert!(Intrinsics::from_focal_35mm(10, 10, f64::NAN).is_err());
+    }
 
     #[test]
     fn ray_is_unit_and_projects_back() {

@@ -10,11 +10,13 @@
 //! [`VideoError::Broken`] naming the frame index where decoding stopped.
 
 mod error;
+mod exif;
 pub mod ffmpeg;
 mod frame;
 mod source;
 
 pub use error::VideoError;
+pub use exif::{focal_length_35mm, focal_length_35mm_in};
 pub use ffmpeg::{ffmpeg_available, probe, VideoInfo, VideoReader};
 pub use frame::Frame;
 pub use source::{is_image_path, read_image, FrameSource, IMAGE_EXTENSIONS};

@@ -22,7 +22,7 @@ use visage_pipeline::{
     write_atomically, DepthSequence, MeshingOptions, PipelineError, ANCHORED_WEIGHTS_FACE,
     ANCHORED_WEIGHTS_MAP, DEFAULT_MAX_DEPTH_M,
 };
-use visage_video::{is_image_path, read_image, FrameSource};
+use visage_video::{focal_length_35mm, is_image_path, read_image, FrameSource};
 
 use crate::video_run::{
     run_pipeline, DepthSource, FrameMetrics, FusionParams, MeshKind, Output, RunConfig, RunOutcome,
@@ -56,8 +56,8 @@ pub struct PipelineArgs {
     /// Camera intrinsics JSON ({"width","height","fx","fy","cx","cy"}) for the input's size.
     #[arg(long, conflicts_with = "fov_deg")]
     pub intrinsics: Option<PathBuf>,
-    /// Horizontal field of view (degrees) when no intrinsics file is given (default 60). EXIF
-    /// focal lengths are not read.
+    /// Horizontal field of view (degrees) when no intrinsics file is given. Default: the
+    /// 35 mm-equivalent focal length in an image input's EXIF if present, else 60°.
     #[arg(long)]
     pub fov_deg: Option<f64>,
     /// Depth source: `face` (the metric face fit, the face-CNN surface) or a folder of 16-bit
@@ -261,7 +261,16 @@ pub fn execute(
             })?;
             k
         }
-        None => Intrinsics::from_fov(width, height, fov)?,
+        None => match (p.fov_deg, exif_focal(&source)) {
+            (None, Some((path, f35))) => {
+                eprintln!(
+                    "intrinsics: {f35} mm (35 mm equivalent) from the EXIF of {}",
+                    path.display()
+                );
+                Intrinsics::from_focal_35mm(width, height, f35)?
+            }
+            _ => Intrinsics::from_fov(width, height, fov)?,
+        },
     };
     let depth = match p.depth.as_str() {
         "face" => DepthSource::Face,
@@ -319,6 +328,17 @@ pub fn execute(
 }
 
 /// The display size of the input's frames and, when known, the number of frames.
+/// The 35 mm-equivalent focal length in the EXIF of an image input's first image, if any.
+fn exif_focal(source: &FrameSource) -> Option<(PathBuf, f64)> {
+    match source {
+        FrameSource::Images { paths, .. } => {
+            let first = paths.first()?;
+            focal_length_35mm(first).map(|f| (first.clone(), f))
+        }
+        FrameSource::Video(_) => None,
+    }
+}
+
 fn input_size(input: &Path, source: &FrameSource) -> anyhow::Result<(u32, u32, Option<usize>)> {
     match source {
         FrameSource::Video(reader) => {
