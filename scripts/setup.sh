@@ -51,9 +51,7 @@ fi
 out=out/sample
 rm -rf "$out" && mkdir -p "$out"
 "$bin" run "$video" --out "$out" --save-raw
-# The clip is 480×480; `visage run` assumes a 60° horizontal field of view (the default).
-awk 'BEGIN { f = 240 / (sin(0.5235987756) / cos(0.5235987756));
-  printf "{\"width\": 480, \"height\": 480, \"fx\": %.6f, \"fy\": %.6f, \"cx\": 239.5, \"cy\": 239.5}\n", f, f }' > "$out/camera.json"
+# `visage run` writes the intrinsics it used (here the default 60° field of view) to camera.json.
 for frame in 000000 000060 000120 000180; do
   "$bin" render "$out/meshes/$frame.ply" --intrinsics "$out/camera.json" --out "$out/preview_$frame.png"
   "$bin" render "$out/raw/$frame.ply" --intrinsics "$out/camera.json" --out "$out/preview_${frame}_raw.png"

@@ -88,6 +88,15 @@ fn a_short_clip_gives_a_mesh_landmarks_and_metrics_per_frame() {
     );
     let m = json(&out.join("metrics.json"));
     assert_eq!(m["status"], "complete");
+    // The camera the meshes are in, readable by `visage render --intrinsics`.
+    let k = visage_camera::Intrinsics::load_json(&out.join("camera.json")).unwrap();
+    assert_eq!(
+        (k.width, k.height),
+        (
+            m["intrinsics"]["width"].as_u64().unwrap() as u32,
+            m["intrinsics"]["height"].as_u64().unwrap() as u32
+        )
+    );
     let frames = m["frames"].as_array().unwrap();
     assert_eq!(frames.len(), 8);
     for f in frames {

@@ -104,7 +104,8 @@ pub struct PipelineArgs {
 pub struct RunArgs {
     #[command(flatten)]
     pub pipeline: PipelineArgs,
-    /// Output folder: meshes/NNNNNN.ply, raw/ (with --save-raw), landmarks.json, metrics.json.
+    /// Output folder: meshes/NNNNNN.ply, raw/ (with --save-raw), landmarks.json, metrics.json,
+    /// camera.json (the intrinsics used).
     #[arg(long)]
     pub out: PathBuf,
     /// Also write the raw (unfused) surface on the same mesh to OUT/raw/.
@@ -170,6 +171,10 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         summary: &outcome.summary,
         frames: &outcome.frames,
     };
+    // The camera the meshes are in: `visage render MESH --intrinsics OUT/camera.json`.
+    let camera_path = args.out.join("camera.json");
+    k.save_json(&camera_path)
+        .with_context(|| format!("cannot write {}", camera_path.display()))?;
     let metrics_path = args.out.join("metrics.json");
     let text = serde_json::to_string_pretty(&report)?;
     write_atomically(&metrics_path, |tmp: &Path| {
