@@ -28,12 +28,13 @@ if [ ${#need[@]} -gt 0 ]; then
   fi
 fi
 
+target_dir="${CARGO_TARGET_DIR:-target}"
 if [ "$mode" = ci ]; then
   cargo build -q -p visage-cli
-  bin=target/debug/visage
+  bin="$target_dir/debug/visage"
 else
   cargo build --release -p visage-cli
-  bin=target/release/visage
+  bin="$target_dir/release/visage"
 fi
 
 # Model files: npm package @mediapipe/face_mesh, pinned and sha256-checked, into models/.
