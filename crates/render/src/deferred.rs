@@ -12,7 +12,7 @@ use visage_camera::{DepthKind, Intrinsics};
 use visage_mesh::TriMesh;
 
 use crate::frame::Albedo;
-use crate::rasterize::{Rasterizer, ScreenTriangle, NO_TRIANGLE};
+use crate::rasterize::{ScreenTriangle, NO_TRIANGLE};
 use crate::shading::{BlinnPhong, SurfaceLanes, LANES};
 
 /// Attributes at the three corners of a set-up (mesh barycentrics `B`, one row per corner):
@@ -69,9 +69,7 @@ impl CornerAttributes {
 
 /// Everything the pass needs that is constant over a frame.
 pub(crate) struct DeferredPass<'a> {
-    /// The rasterised frame (visibility buffer and set-ups).
-    pub raster: &'a Rasterizer,
-    /// Corner attributes, indexed like [`Rasterizer::setup_chunks`].
+    /// Corner attributes, indexed like the rasteriser's set-up chunks.
     pub corners: &'a [Vec<CornerAttributes>],
     pub shader: BlinnPhong,
     pub albedo: Albedo<'a>,
@@ -81,8 +79,8 @@ pub(crate) struct DeferredPass<'a> {
     pub kind: DepthKind,
 }
 
-/// Visible pixels of a row awaiting shading: the scratch of [`DeferredPass::shade_row`], kept
-/// by each worker across rows.
+/// Visible pixels of a row awaiting shading: the scratch of [`DeferredPass::shade_tile`], kept
+/// by each worker across tiles.
 pub(crate) struct Block {
     /// Number of pixels held.
     len: usize,
@@ -105,58 +103,100 @@ impl Default for Block {
     }
 }
 
+/// Output rows of the pass (a tile's or one row): colour, depth, and triangle ids and
+/// barycentrics (empty when not wanted), each a whole number of image rows.
+pub(crate) struct Rows<'a> {
+    pub color: &'a mut [[f32; 3]],
+    pub depth: &'a mut [f32],
+    pub triangle: &'a mut [u32],
+    pub bary: &'a mut [[f32; 3]],
+}
+
 impl DeferredPass<'_> {
-    /// Shades row `y`: colour and depth into `c_row` and `d_row`, the visible triangle and
-    /// barycentrics into `t_row` and `b_row` unless those are empty (not wanted).
+    /// Shades the tile of image rows from `row0` on whose visibility buffer is `index` (set-up
+    /// ids into `chunks`) into `out`.
     ///
     /// On x86-64 CPUs with AVX2 the pass is compiled a second time for 256-bit vectors and chosen
     /// at run time; Rust never fuses or reorders floating-point operations, so the results are
     /// identical.
-    pub(crate) fn shade_row(
+    pub(crate) fn shade_tile(
         &self,
         block: &mut Block,
-        y: usize,
-        c_row: &mut [[f32; 3]],
-        d_row: &mut [f32],
-        t_row: &mut [u32],
-        b_row: &mut [[f32; 3]],
+        row0: usize,
+        chunks: &[Vec<ScreenTriangle>],
+        index: &[u32],
+        out: Rows<'_>,
     ) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2 (checked just above).
-            unsafe { self.shade_row_avx2(block, y, c_row, d_row, t_row, b_row) };
+            unsafe { self.shade_tile_avx2(block, row0, chunks, index, out) };
             return;
         }
-        self.shade_row_inline(block, y, c_row, d_row, t_row, b_row);
+        self.shade_tile_inline(block, row0, chunks, index, out);
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn shade_row_avx2(
+    fn shade_tile_avx2(
         &self,
         block: &mut Block,
-        y: usize,
-        c_row: &mut [[f32; 3]],
-        d_row: &mut [f32],
-        t_row: &mut [u32],
-        b_row: &mut [[f32; 3]],
+        row0: usize,
+        chunks: &[Vec<ScreenTriangle>],
+        index: &[u32],
+        out: Rows<'_>,
     ) {
-        self.shade_row_inline(block, y, c_row, d_row, t_row, b_row);
+        self.shade_tile_inline(block, row0, chunks, index, out);
     }
 
     #[inline(always)]
-    fn shade_row_inline(
+    fn shade_tile_inline(
+        &self,
+        block: &mut Block,
+        row0: usize,
+        chunks: &[Vec<ScreenTriangle>],
+        index: &[u32],
+        out: Rows<'_>,
+    ) {
+        let w = self.intrinsics.width as usize;
+        // Rows of the optional buffers, or empty rows when a buffer is not wanted.
+        let mut t_rows = out.triangle.chunks_mut(w);
+        let mut b_rows = out.bary.chunks_mut(w);
+        for (r, ((setups, color), depth)) in index
+            .chunks(w)
+            .zip(out.color.chunks_mut(w))
+            .zip(out.depth.chunks_mut(w))
+            .enumerate()
+        {
+            let row = Rows {
+                color,
+                depth,
+                triangle: t_rows.next().unwrap_or_default(),
+                bary: b_rows.next().unwrap_or_default(),
+            };
+            self.shade_row(block, row0 + r, chunks, setups, row);
+        }
+    }
+
+    /// Shades row `y` whose visibility buffer row is `setups` into `row` (one image row; the
+    /// visible triangle and barycentrics only where those buffers are not empty).
+    #[inline(always)]
+    fn shade_row(
         &self,
         block: &mut Block,
         y: usize,
-        c_row: &mut [[f32; 3]],
-        d_row: &mut [f32],
-        t_row: &mut [u32],
-        b_row: &mut [[f32; 3]],
+        chunks: &[Vec<ScreenTriangle>],
+        setups: &[u32],
+        row: Rows<'_>,
     ) {
+        let Rows {
+            color: c_row,
+            depth: d_row,
+            triangle: t_row,
+            bary: b_row,
+        } = row;
         let k = &self.intrinsics;
         let (inv_fx, inv_fy) = (1.0 / k.fx, 1.0 / k.fy);
-        let setups = self.raster.visibility_row(y);
         let yf = y as f64;
         let yr = (yf - k.cy) * inv_fy;
         let yr2_plus_1 = yr * yr + 1.0;
@@ -168,7 +208,7 @@ impl DeferredPass<'_> {
             let id = ((s >> 16) as usize, (s & 0xffff) as usize);
             let found = (s != NO_TRIANGLE)
                 .then(|| {
-                    let st = self.raster.setup_chunks().get(id.0)?.get(id.1)?;
+                    let st = chunks.get(id.0)?.get(id.1)?;
                     Some((st, self.corners.get(id.0)?.get(id.1)?))
                 })
                 .flatten();

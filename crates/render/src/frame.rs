@@ -5,10 +5,10 @@ use visage_camera::{DepthKind, DepthMap};
 use visage_mesh::TriMesh;
 
 use crate::camera::Camera;
-use crate::deferred::{Block, CornerAttributes, DeferredPass};
+use crate::deferred::{Block, CornerAttributes, DeferredPass, Rows};
 use crate::mat4::{Mat3, Mat4};
 use crate::normals::{normal_matrix, transform_normal, vertex_normals_into};
-use crate::rasterize::{CullMode, Rasterizer, NO_TRIANGLE};
+use crate::rasterize::{CullMode, Rasterizer, NO_TRIANGLE, TILE_ROWS};
 use crate::shading::{BlinnPhong, Light, Material};
 use crate::texture::{Texture, Wrap};
 use crate::RenderError;
@@ -188,7 +188,7 @@ impl Renderer {
         let nm = normal_matrix(&model_view)?;
 
         self.rasterizer
-            .rasterize(&mesh.vertices, &mesh.triangles, model, camera, scene.cull)?;
+            .set_up(&mesh.vertices, &mesh.triangles, model, camera, scene.cull)?;
 
         // Step 3 of Algorithm 3: normals to camera space (Eq. (6.2)).
         let object_normals: &[[f64; 3]] = if mesh.normals.is_empty() {
@@ -221,9 +221,9 @@ impl Renderer {
                 );
             });
 
-        // Steps 7–10: one reconstruction and shading evaluation per visible pixel.
+        // Steps 7–10: one reconstruction and shading evaluation per visible pixel, each tile
+        // right after its scan, while its visibility buffer and set-ups are still in cache.
         let pass = DeferredPass {
-            raster: &self.rasterizer,
             corners: &self.corners,
             shader,
             albedo: scene.albedo,
@@ -232,31 +232,35 @@ impl Renderer {
             intrinsics: k,
             kind: frame.depth.kind,
         };
-        let w = k.width as usize;
-        // Rows of the optional buffers, or empty rows when a buffer is not wanted.
-        let tri_rows: Vec<&mut [u32]> = if frame.triangle_id.is_empty() {
-            (0..k.height).map(|_| &mut [][..]).collect()
+        let tile_len = TILE_ROWS * k.width as usize;
+        let n_tiles = (k.height as usize).div_ceil(TILE_ROWS);
+        // Tiles of the optional buffers, or empty tiles when a buffer is not wanted.
+        let tri_tiles: Vec<&mut [u32]> = if frame.triangle_id.is_empty() {
+            (0..n_tiles).map(|_| &mut [][..]).collect()
         } else {
-            frame.triangle_id.chunks_mut(w).collect()
+            frame.triangle_id.chunks_mut(tile_len).collect()
         };
-        let bary_rows: Vec<&mut [[f32; 3]]> = if frame.barycentrics.is_empty() {
-            (0..k.height).map(|_| &mut [][..]).collect()
+        let bary_tiles: Vec<&mut [[f32; 3]]> = if frame.barycentrics.is_empty() {
+            (0..n_tiles).map(|_| &mut [][..]).collect()
         } else {
-            frame.barycentrics.chunks_mut(w).collect()
+            frame.barycentrics.chunks_mut(tile_len).collect()
         };
-        frame
+        let tiles = frame
             .color
-            .par_chunks_mut(w)
-            .zip(frame.depth.data.par_chunks_mut(w))
-            .zip(tri_rows)
-            .zip(bary_rows)
-            .enumerate()
-            .for_each_init(
-                Block::default,
-                |block, (y, (((c_row, d_row), t_row), b_row))| {
-                    pass.shade_row(block, y, c_row, d_row, t_row, b_row)
-                },
-            );
+            .par_chunks_mut(tile_len)
+            .zip(frame.depth.data.par_chunks_mut(tile_len))
+            .zip(tri_tiles)
+            .zip(bary_tiles)
+            .map(|(((color, depth), triangle), bary)| Rows {
+                color,
+                depth,
+                triangle,
+                bary,
+            });
+        self.rasterizer
+            .scan_tiles(tiles, |out, row0, chunks, index| {
+                pass.shade_tile(&mut Block::default(), row0, chunks, index, out)
+            });
         Ok(())
     }
 }

@@ -136,6 +136,22 @@ impl Rasterizer {
         camera: &Camera,
         cull: CullMode,
     ) -> Result<(), RenderError> {
+        self.set_up(positions, triangles, model, camera, cull)?;
+        let n_tiles = self.bins.len();
+        self.scan_tiles((0..n_tiles).into_par_iter(), |_, _, _, _| {});
+        Ok(())
+    }
+
+    /// The first half of [`Rasterizer::rasterize`]: vertex transforms, triangle set-ups and
+    /// binning into tiles ([`Rasterizer::setup_chunks`] is ready afterwards).
+    pub(crate) fn set_up(
+        &mut self,
+        positions: &[[f64; 3]],
+        triangles: &[[u32; 3]],
+        model: &Mat4,
+        camera: &Camera,
+        cull: CullMode,
+    ) -> Result<(), RenderError> {
         camera.validate()?;
         if !model.is_finite_affine() {
             return Err(RenderError::Transform {
@@ -202,22 +218,35 @@ impl Rasterizer {
                 }
             }
         }
+        Ok(())
+    }
 
-        // Tile-parallel scan conversion with depth test.
-        let n_pixels = width as usize * height as usize;
+    /// The second half of [`Rasterizer::rasterize`]: tile-parallel scan conversion with depth
+    /// test. Right after scanning tile `t` (rows `t · TILE_ROWS ..`), while its part of the
+    /// visibility buffer is still in cache, calls `then(item, row0, setup_chunks, index)` with
+    /// the `t`-th of `per_tile` (one item per tile), the tile's first row and its rows of the
+    /// visibility buffer.
+    pub(crate) fn scan_tiles<T: Send>(
+        &mut self,
+        per_tile: impl IndexedParallelIterator<Item = T>,
+        then: impl Fn(T, usize, &[Vec<ScreenTriangle>], &[u32]) + Sync,
+    ) {
+        let width = self.width as usize;
+        let n_pixels = width * self.height as usize;
         self.depth.resize(n_pixels, f32::INFINITY);
         self.index.resize(n_pixels, NO_TRIANGLE);
-        let tile_len = TILE_ROWS * width as usize;
+        let tile_len = TILE_ROWS * width;
         let (chunks, bins) = (&self.setup_chunks, &self.bins);
         self.depth
             .par_chunks_mut(tile_len)
             .zip(self.index.par_chunks_mut(tile_len))
+            .zip(per_tile)
             .enumerate()
-            .for_each(|(tile, (depth, index))| {
-                let row0 = (tile * TILE_ROWS) as i32;
-                scan_tile(chunks, &bins[tile], row0, width as usize, depth, index);
+            .for_each(|(tile, ((depth, index), item))| {
+                let row0 = tile * TILE_ROWS;
+                scan_tile(chunks, &bins[tile], row0 as i32, width, depth, index);
+                then(item, row0, chunks, index);
             });
-        Ok(())
     }
 
     /// The visible fragment at pixel `(x, y)`, or `None` for background or outside the image.
