@@ -2,36 +2,16 @@
 //! right-hand side — and a streaming frame allocates nothing. One test in its own binary: the
 //! allocation counter and the factorisation count are process-wide.
 
+#[path = "common/counting_allocator.rs"]
+mod counting_allocator;
+
 #[path = "common/face_scene.rs"]
 mod face_scene;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
+use counting_allocator::allocations;
 use face_scene::{expression, fuser, observe, pose, template};
 use visage_fem::Factorization;
 use visage_pipeline::{AnchoredFrame, FrameDepth, FrameStatus};
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 #[test]
 fn one_factorisation_per_clip_and_no_allocation_per_frame() {
@@ -51,7 +31,7 @@ fn one_factorisation_per_clip_and_no_allocation_per_frame() {
     let factored = Factorization::numeric_count();
     let mut allocations_after_first = 0;
     for (k, (p, surface, px)) in frames.iter().enumerate() {
-        let start = ALLOCATIONS.load(Ordering::SeqCst);
+        let start = allocations();
         let r = f
             .process(&AnchoredFrame {
                 landmarks_px: px,
@@ -63,7 +43,7 @@ fn one_factorisation_per_clip_and_no_allocation_per_frame() {
         assert_eq!(r.status, FrameStatus::Solved);
         assert!(quality.1.mean_abs_h.is_finite());
         if k > 0 {
-            allocations_after_first += ALLOCATIONS.load(Ordering::SeqCst) - start;
+            allocations_after_first += allocations() - start;
         }
     }
     assert_eq!(

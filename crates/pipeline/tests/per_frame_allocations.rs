@@ -1,34 +1,14 @@
 //! The per-frame hot path (sampling, hole filling, right-hand side, solve, residual, metrics)
 //! allocates nothing once a predecessor exists. Counted with a wrapping global allocator.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+#[path = "common/counting_allocator.rs"]
+mod counting_allocator;
 
+use counting_allocator::allocations;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_fem::{FusionSystem, Weights};
 use visage_mesh::Mask;
 use visage_pipeline::{FrameStatus, Fuser, FusionSetup, MeshingOptions};
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 #[test]
 fn streaming_frames_allocate_nothing() {
@@ -47,9 +27,9 @@ fn streaming_frames_allocate_nothing() {
         d
     };
     // The counter sees allocations at all.
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let before = allocations();
     let probe = std::hint::black_box(vec![0u8; 64]);
-    assert!(ALLOCATIONS.load(Ordering::SeqCst) > before && probe.len() == 64);
+    assert!(allocations() > before && probe.len() == 64);
     let first = frame(0.0);
     let setup = FusionSetup::new(
         &k,
@@ -63,10 +43,10 @@ fn streaming_frames_allocate_nothing() {
     assert_eq!(fuser.process(&first).status, FrameStatus::Solved);
     let frames: Vec<DepthMap> = (1..5).map(|t| frame(t as f64)).collect();
     for depth in &frames {
-        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        let before = allocations();
         let r = fuser.process(depth);
         let quality = fuser.frame_quality();
-        let after = ALLOCATIONS.load(Ordering::SeqCst);
+        let after = allocations();
         assert_eq!(r.status, FrameStatus::Solved);
         assert!(r.relative_residual < 1e-10 && quality.1.mean_abs_h > 0.0);
         assert_eq!(
