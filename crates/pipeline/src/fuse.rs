@@ -14,7 +14,7 @@ use visage_mesh::io::write_ply;
 use visage_mesh::TriMesh;
 
 use crate::report::{
-    FrameMetrics, FrameStatus, FuseReport, FuseSummary, MeshSummary, SolverSummary,
+    FrameMetrics, FrameQuality, FrameStatus, FuseReport, FuseSummary, MeshSummary, SolverSummary,
 };
 use crate::{write_atomically, DepthSequence, FusionSetup, MeshingOptions, PipelineError};
 
@@ -381,15 +381,7 @@ fn frame_metrics(
         rhs_ms: r.rhs_seconds * 1e3,
         solve_ms: r.solve_seconds * 1e3,
         relative_residual: r.relative_residual,
-        mean_abs_h_raw: raw.mean_abs_h,
-        mean_abs_h: fused.mean_abs_h,
-        curvature_improvement: if fused.mean_abs_h > 0.0 {
-            raw.mean_abs_h / fused.mean_abs_h
-        } else {
-            0.0
-        },
-        roughness_raw: raw.roughness,
-        roughness: fused.roughness,
+        quality: FrameQuality::of(&raw, &fused),
     }
 }
 

@@ -23,4 +23,6 @@ pub use fuse::{
     fuse_sequence, to_positions, FrameResult, FuseOptions, Fuser, Mode, DEFAULT_MAX_DEPTH_M,
 };
 pub use fusion_setup::{FusionSetup, MeshingOptions, INPAINT_SWEEPS};
-pub use report::{FrameMetrics, FrameStatus, FuseReport, FuseSummary, MeshSummary, SolverSummary};
+pub use report::{
+    FrameMetrics, FrameQuality, FrameStatus, FuseReport, FuseSummary, MeshSummary, SolverSummary,
+};

@@ -1,7 +1,7 @@
 //! The `metrics.json` written by a fusion run.
 
 use serde::Serialize;
-use visage_fem::{ClipReport, Weights};
+use visage_fem::{ClipReport, SurfaceQuality, Weights};
 
 use crate::fuse::FuseOptions;
 
@@ -31,16 +31,41 @@ pub struct FrameMetrics {
     pub solve_ms: f64,
     /// Relative residual of this frame's linear system.
     pub relative_residual: f64,
-    /// Mean |H| (1/m) of the raw back-projected surface on the mesh.
+    /// Curvature and roughness, raw and fused (flattened into the frame's record).
+    #[serde(flatten)]
+    pub quality: FrameQuality,
+}
+
+/// Mean |H| and roughness of a frame's raw and fused surfaces (ERRATA 13).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct FrameQuality {
+    /// Mean |H| (1/m) of the raw surface on the mesh.
     pub mean_abs_h_raw: f64,
     /// Mean |H| (1/m) after regularisation.
     pub mean_abs_h: f64,
-    /// `mean_abs_h_raw / mean_abs_h`.
+    /// `mean_abs_h_raw / mean_abs_h` (0 when the fused surface is flat).
     pub curvature_improvement: f64,
-    /// Roughness (radians) of the raw surface.
+    /// Roughness (radians, mean normal deviation from the one-ring) of the raw surface.
     pub roughness_raw: f64,
     /// Roughness (radians) after regularisation.
     pub roughness: f64,
+}
+
+impl FrameQuality {
+    /// The record of a raw and a fused surface's measurements.
+    pub fn of(raw: &SurfaceQuality, fused: &SurfaceQuality) -> Self {
+        FrameQuality {
+            mean_abs_h_raw: raw.mean_abs_h,
+            mean_abs_h: fused.mean_abs_h,
+            curvature_improvement: if fused.mean_abs_h > 0.0 {
+                raw.mean_abs_h / fused.mean_abs_h
+            } else {
+                0.0
+            },
+            roughness_raw: raw.roughness,
+            roughness: fused.roughness,
+        }
+    }
 }
 
 /// Size and kind of the fixed mesh.
@@ -127,9 +152,9 @@ impl FuseSummary {
                 .iter()
                 .map(|f| f.relative_residual)
                 .fold(0.0, f64::max),
-            mean_curvature_improvement: mean(&|f| f.curvature_improvement),
-            mean_roughness_raw: mean(&|f| f.roughness_raw),
-            mean_roughness: mean(&|f| f.roughness),
+            mean_curvature_improvement: mean(&|f| f.quality.curvature_improvement),
+            mean_roughness_raw: mean(&|f| f.quality.roughness_raw),
+            mean_roughness: mean(&|f| f.quality.roughness),
         }
     }
 }

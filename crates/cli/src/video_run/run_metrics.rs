@@ -4,6 +4,7 @@
 
 use serde::Serialize;
 use visage_camera::{Intrinsics, RigidTransform};
+use visage_pipeline::FrameQuality;
 
 use super::rigid_jitter::JitterMeter;
 
@@ -90,14 +91,9 @@ pub struct FrameMetrics {
     pub valid_fraction: f64,
     /// Relative residual of the frame's linear system (clip mode: the clip solve's).
     pub relative_residual: f64,
-    /// Mean |H| (1/m) of the raw surface on the mesh and of the fused one.
-    pub mean_abs_h_raw: f64,
-    pub mean_abs_h: f64,
-    /// `mean_abs_h_raw / mean_abs_h` (ERRATA 13).
-    pub curvature_improvement: f64,
-    /// Roughness (radians, mean normal deviation from the one-ring) raw and fused.
-    pub roughness_raw: f64,
-    pub roughness: f64,
+    /// Curvature and roughness, raw and fused (ERRATA 13; flattened into the record).
+    #[serde(flatten)]
+    pub quality: FrameQuality,
     /// Mean distance (px) between the projected landmark points and the tracked landmarks.
     pub reprojection_px: Option<f64>,
     pub reprojection_raw_px: Option<f64>,
@@ -336,9 +332,9 @@ impl RunSummary {
                 .iter()
                 .map(|f| f.relative_residual)
                 .fold(0.0, f64::max),
-            mean_curvature_improvement: mean(&|f| f.curvature_improvement),
-            mean_roughness_raw: mean(&|f| f.roughness_raw),
-            mean_roughness: mean(&|f| f.roughness),
+            mean_curvature_improvement: mean(&|f| f.quality.curvature_improvement),
+            mean_roughness_raw: mean(&|f| f.quality.roughness_raw),
+            mean_roughness: mean(&|f| f.quality.roughness),
             quality,
         }
     }

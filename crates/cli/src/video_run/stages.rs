@@ -33,7 +33,7 @@ use visage_face::{
 use visage_fem::ClipOptions;
 use visage_mesh::io::{write_ply_with, PlyFormat};
 use visage_mesh::TriMesh;
-use visage_pipeline::{write_atomically, DepthSequence, FrameStatus};
+use visage_pipeline::{write_atomically, DepthSequence, FrameQuality, FrameStatus};
 use visage_video::{Frame, FrameSource};
 
 use super::process_stats::{cpu_seconds, peak_rss_mib};
@@ -143,7 +143,7 @@ enum ToWriter {
     ClipSurfaces {
         index: usize,
         surfaces: Box<Surfaces>,
-        quality: [f64; 4],
+        quality: FrameQuality,
         relative_residual: f64,
         extra_fuse_ms: f64,
     },
@@ -341,11 +341,7 @@ fn fuse_stage(
             ms,
             valid_fraction: 0.0,
             relative_residual: 0.0,
-            mean_abs_h_raw: 0.0,
-            mean_abs_h: 0.0,
-            curvature_improvement: 0.0,
-            roughness_raw: 0.0,
-            roughness: 0.0,
+            quality: FrameQuality::default(),
             reprojection_px: None,
             reprojection_raw_px: None,
             pose: None,
@@ -415,15 +411,7 @@ fn fuse_stage(
         };
         metrics.valid_fraction = fused.valid_fraction;
         metrics.relative_residual = fused.relative_residual;
-        set_quality(
-            &mut metrics,
-            [
-                fused.raw_quality.mean_abs_h,
-                fused.fused_quality.mean_abs_h,
-                fused.raw_quality.roughness,
-                fused.fused_quality.roughness,
-            ],
-        );
+        metrics.quality = FrameQuality::of(&fused.raw_quality, &fused.fused_quality);
         if !topology_sent {
             if let Some(tri) = fusion.triangles() {
                 if out.send(ToWriter::Topology(tri.to_vec())).is_err() {
@@ -469,12 +457,7 @@ fn fuse_stage(
                 let message = ToWriter::ClipSurfaces {
                     index,
                     surfaces: s,
-                    quality: [
-                        raw_q.mean_abs_h,
-                        fused_q.mean_abs_h,
-                        raw_q.roughness,
-                        fused_q.roughness,
-                    ],
+                    quality: FrameQuality::of(&raw_q, &fused_q),
                     relative_residual: report.relative_residual,
                     extra_fuse_ms: share,
                 };
@@ -495,15 +478,6 @@ fn fill_surfaces(fusion: &SurfaceFusion, landmarks_px: &[[f64; 2]], s: &mut Surf
     s.landmarks_px.clear();
     s.landmarks_px.extend_from_slice(landmarks_px);
     fusion.landmark_points(landmarks_px, &mut s.fused_landmarks, &mut s.raw_landmarks);
-}
-
-/// `[mean |H| raw, fused, roughness raw, fused]` into the frame's record.
-fn set_quality(m: &mut FrameMetrics, q: [f64; 4]) {
-    m.mean_abs_h_raw = q[0];
-    m.mean_abs_h = q[1];
-    m.curvature_improvement = if q[1] > 0.0 { q[0] / q[1] } else { 0.0 };
-    m.roughness_raw = q[2];
-    m.roughness = q[3];
 }
 
 fn read_depth(seq: &DepthSequence, index: usize, k: &Intrinsics) -> anyhow::Result<DepthMap> {
@@ -591,7 +565,7 @@ impl<'a> Writer<'a> {
                         continue;
                     };
                     let m = &mut self.frames[position];
-                    set_quality(m, quality);
+                    m.quality = quality;
                     m.relative_residual = relative_residual;
                     m.ms.fuse += extra_fuse_ms;
                     self.write_surfaces(position, &surfaces)?;
