@@ -357,8 +357,10 @@ impl AnchoredFuser {
         }
         // The fitted pose at the face's scale: the template scaled about the camera centre
         // projects exactly as the fitted one.
-        let mut pose = frame.pose;
-        pose.translation = pose.translation.map(|t| t * self.scale);
+        let pose = RigidTransform {
+            translation: frame.pose.translation.map(|t| t * self.scale),
+            ..frame.pose
+        };
         self.pose = pose;
         for i in 0..self.domain.vertex_count() {
             let head = if self.valid[i] {

@@ -1,6 +1,8 @@
 //! Sequence-level orchestration of visage: depth sequences in, fused mesh sequences and
 //! metrics out. The stages live in the library crates (`visage-camera`, `visage-mesh`,
-//! `visage-fem`); this crate fixes the per-sequence set-up and drives the per-frame loop.
+//! `visage-fem`); this crate fixes the per-sequence set-up and drives the per-frame loop —
+//! on the paper's image-plane mesh ([`Fuser`]) or on the face-anchored mesh with a
+//! pose-compensated temporal term ([`FaceDomain`], [`AnchoredFuser`]).
 
 mod anchored_fuser;
 mod atomic_write;
