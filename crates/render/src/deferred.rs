@@ -1,82 +1,52 @@
 //! The deferred shading pass, steps 7–10 of Algorithm 3: every visible pixel of the visibility
-//! buffer is reconstructed exactly once (depth, barycentrics) and shaded by Eq. (6.4).
+//! buffer is reconstructed exactly once (depth, normal, albedo source) and shaded by Eq. (6.4).
 //!
-//! A row is walked in spans of equal set-up id. What depends on the set-up (perspective-correct
-//! weights, depth, interpolated normal, texture sample) is computed span by span into a block of
-//! [`LANES`] pixels held as structure of arrays; the rest (view vector, normalisation, the
-//! two-sided flip, Blinn–Phong) runs over the whole block in branch-free loops that compile to
-//! SIMD code. Per pixel the operations and their order are those of a scalar evaluation, so the
-//! image does not depend on how a row falls into blocks.
+//! A row is walked in spans of equal set-up id. Within a span the set-up's planes
+//! ([`crate::interpolation`]) are evaluated on groups of [`GROUP`] consecutive pixels (lane-wise
+//! arithmetic that compiles to SIMD code) into a block of [`LANES`] pixels held as structure of
+//! arrays; the rest (texture sampling, view vector, normalisation, the two-sided flip,
+//! Blinn–Phong) runs over the whole block in branch-free loops. Per pixel the operations and
+//! their order do not depend on how a row falls into groups and blocks.
 
 use visage_camera::{DepthKind, Intrinsics};
-use visage_mesh::TriMesh;
 
 use crate::frame::Albedo;
+use crate::interpolation::SetupPlanes;
 use crate::rasterize::{ScreenTriangle, NO_TRIANGLE};
 use crate::shading::{BlinnPhong, SurfaceLanes, LANES};
 
-/// Attributes at the three corners of a set-up (mesh barycentrics `B`, one row per corner):
-/// a pixel's attribute is `Σ_i w_i · (B a)_i` with the corner weights `w`, which equals
-/// `Σ_j bary_j a_j`.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct CornerAttributes {
-    /// Camera-space vertex normals (not normalised).
-    normals: [[f32; 3]; 3],
-    /// Texel-space positions ([`crate::Texture::texel_coords`]) for a textured albedo.
-    texel: [[f64; 2]; 3],
-    /// Vertex colours for a vertex-colour albedo.
-    color: [[f32; 3]; 3],
-}
+/// Pixels of a span evaluated together (four `f64` lanes: one AVX2 register).
+const GROUP: usize = 4;
 
-impl CornerAttributes {
-    /// The attributes of set-up `st` of `mesh`, with camera-space vertex normals `normals`.
-    /// Indices must be valid (meshes are validated before rasterisation).
-    pub(crate) fn new(
-        st: &ScreenTriangle,
-        mesh: &TriMesh,
-        normals: &[[f32; 3]],
-        albedo: &Albedo<'_>,
-    ) -> CornerAttributes {
-        let t = mesh.triangles[st.triangle() as usize].map(|i| i as usize);
-        let bc = st.corner_bary();
-        let at_corners = |a: [[f32; 3]; 3]| -> [[f32; 3]; 3] {
-            std::array::from_fn(|i| {
-                std::array::from_fn(|c| {
-                    bc[i][0] * a[0][c] + bc[i][1] * a[1][c] + bc[i][2] * a[2][c]
-                })
-            })
-        };
-        let mut out = CornerAttributes {
-            normals: at_corners(t.map(|i| normals[i])),
-            ..CornerAttributes::default()
-        };
-        match albedo {
-            Albedo::Texture { texture, .. } => {
-                let uv = t.map(|i| mesh.uvs[i]);
-                out.texel = std::array::from_fn(|i| {
-                    let b = bc[i].map(f64::from);
-                    texture.texel_coords(std::array::from_fn(|c| {
-                        b[0] * uv[0][c] + b[1] * uv[1][c] + b[2] * uv[2][c]
-                    }))
-                });
-            }
-            Albedo::VertexColors => out.color = at_corners(t.map(|i| mesh.colors[i])),
-            Albedo::Constant(_) => {}
-        }
-        out
+/// Sets every pixel of `pixels` to `color`; a grey (black, the default background) is one
+/// `f32` fill, which compiles to wide stores instead of 12-byte ones.
+#[inline(always)]
+fn fill_color(pixels: &mut [[f32; 3]], color: [f32; 3]) {
+    let [r, g, b] = color.map(f32::to_bits);
+    if r == g && g == b {
+        pixels.as_flattened_mut().fill(color[0]);
+    } else {
+        pixels.fill(color);
     }
 }
 
 /// Everything the pass needs that is constant over a frame.
 pub(crate) struct DeferredPass<'a> {
-    /// Corner attributes, indexed like the rasteriser's set-up chunks.
-    pub corners: &'a [Vec<CornerAttributes>],
     pub shader: BlinnPhong,
     pub albedo: Albedo<'a>,
     pub background: [f32; 3],
     pub two_sided: bool,
     pub intrinsics: Intrinsics,
     pub kind: DepthKind,
+}
+
+/// The set-ups of a tile: those overlapping it (`bin`, ids into `chunks`) and their planes
+/// (`planes[k]` of set-up `bin[k]`). The tile's visibility buffer holds positions `k`.
+#[derive(Clone, Copy)]
+pub(crate) struct TileSetups<'a> {
+    pub chunks: &'a [Vec<ScreenTriangle>],
+    pub bin: &'a [u32],
+    pub planes: &'a [SetupPlanes],
 }
 
 /// Visible pixels of a row awaiting shading: the scratch of [`DeferredPass::shade_tile`], kept
@@ -88,6 +58,8 @@ pub(crate) struct Block {
     column: [u32; LANES],
     /// Their ray coordinate `x' = (u − c_x)/f_x`.
     ray_x: [f32; LANES],
+    /// Their texel-space positions (textured albedo only, sampled at flush).
+    texel: [[f64; LANES]; 2],
     /// `normal`: interpolated, not yet normalised; `albedo`: final; `view`: filled at flush.
     surface: SurfaceLanes,
 }
@@ -98,6 +70,7 @@ impl Default for Block {
             len: 0,
             column: [0; LANES],
             ray_x: [0.0; LANES],
+            texel: [[0.0; LANES]; 2],
             surface: SurfaceLanes::default(),
         }
     }
@@ -123,17 +96,17 @@ impl DeferredPass<'_> {
         &self,
         block: &mut Block,
         row0: usize,
-        chunks: &[Vec<ScreenTriangle>],
+        tile: TileSetups<'_>,
         index: &[u32],
         out: Rows<'_>,
     ) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2 (checked just above).
-            unsafe { self.shade_tile_avx2(block, row0, chunks, index, out) };
+            unsafe { self.shade_tile_avx2(block, row0, tile, index, out) };
             return;
         }
-        self.shade_tile_inline(block, row0, chunks, index, out);
+        self.shade_tile_inline(block, row0, tile, index, out);
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -142,11 +115,11 @@ impl DeferredPass<'_> {
         &self,
         block: &mut Block,
         row0: usize,
-        chunks: &[Vec<ScreenTriangle>],
+        tile: TileSetups<'_>,
         index: &[u32],
         out: Rows<'_>,
     ) {
-        self.shade_tile_inline(block, row0, chunks, index, out);
+        self.shade_tile_inline(block, row0, tile, index, out);
     }
 
     #[inline(always)]
@@ -154,7 +127,7 @@ impl DeferredPass<'_> {
         &self,
         block: &mut Block,
         row0: usize,
-        chunks: &[Vec<ScreenTriangle>],
+        tile: TileSetups<'_>,
         index: &[u32],
         out: Rows<'_>,
     ) {
@@ -174,7 +147,7 @@ impl DeferredPass<'_> {
                 triangle: t_rows.next().unwrap_or_default(),
                 bary: b_rows.next().unwrap_or_default(),
             };
-            self.shade_row(block, row0 + r, chunks, setups, row);
+            self.shade_row(block, row0 + r, &tile, setups, row);
         }
     }
 
@@ -185,7 +158,7 @@ impl DeferredPass<'_> {
         &self,
         block: &mut Block,
         y: usize,
-        chunks: &[Vec<ScreenTriangle>],
+        tile: &TileSetups<'_>,
         setups: &[u32],
         row: Rows<'_>,
     ) {
@@ -205,15 +178,18 @@ impl DeferredPass<'_> {
         while x < w {
             let s = setups[x];
             let end = x + setups[x..].iter().take_while(|&&t| t == s).count();
-            let id = ((s >> 16) as usize, (s & 0xffff) as usize);
             let found = (s != NO_TRIANGLE)
                 .then(|| {
-                    let st = chunks.get(id.0)?.get(id.1)?;
-                    Some((st, self.corners.get(id.0)?.get(id.1)?))
+                    let (id, sp) = (tile.bin.get(s as usize)?, tile.planes.get(s as usize)?);
+                    let st = tile
+                        .chunks
+                        .get((id >> 16) as usize)?
+                        .get((id & 0xffff) as usize)?;
+                    Some((st, sp))
                 })
                 .flatten();
-            let Some((st, ca)) = found else {
-                c_row[x..end].fill(self.background);
+            let Some((st, sp)) = found else {
+                fill_color(&mut c_row[x..end], self.background);
                 d_row[x..end].fill(0.0);
                 if let Some(t) = t_row.get_mut(x..end) {
                     t.fill(NO_TRIANGLE);
@@ -224,53 +200,86 @@ impl DeferredPass<'_> {
                 x = end;
                 continue;
             };
-            let rows = st.rows(yf);
-            for (x, d) in (x..end).zip(&mut d_row[x..end]) {
-                let (wt, z) = st.corner_weights(&rows, x as f64);
-                let wf = wt.map(|v| v as f32);
-                let xr = (x as f64 - k.cx) * inv_fx;
-                let value = match self.kind {
-                    DepthKind::Z => z,
-                    DepthKind::Ray => z * (xr * xr + yr2_plus_1).sqrt(),
-                };
-                *d = value as f32;
-                if let Some(t) = t_row.get_mut(x) {
-                    *t = st.triangle();
-                }
-                if let Some(bb) = b_row.get_mut(x) {
+            if let Some(t) = t_row.get_mut(x..end) {
+                t.fill(st.triangle());
+            }
+            if let Some(b) = b_row.get_mut(x..end) {
+                // Exactly as the depth renderer computes them.
+                let rows = st.rows(yf);
+                for (x, bb) in (x..end).zip(b) {
+                    let (wt, _) = st.corner_weights(&rows, x as f64);
                     *bb = st.mesh_bary(&wt).map(|v| v as f32);
                 }
-                let lane = block.len;
-                let surface = &mut block.surface;
-                let cn = &ca.normals;
-                for (c, normal) in surface.normal.iter_mut().enumerate() {
-                    normal[lane] = wf[0] * cn[0][c] + wf[1] * cn[1][c] + wf[2] * cn[2][c];
-                }
-                let albedo = match self.albedo {
-                    Albedo::Texture { texture, wrap } => {
-                        let cxy = &ca.texel;
-                        let xy = std::array::from_fn(|c| {
-                            wt[0] * cxy[0][c] + wt[1] * cxy[1][c] + wt[2] * cxy[2][c]
-                        });
-                        texture.sample_rgb_at(xy, wrap)
-                    }
-                    Albedo::VertexColors => {
-                        let cc = &ca.color;
-                        std::array::from_fn(|c| {
-                            wf[0] * cc[0][c] + wf[1] * cc[1][c] + wf[2] * cc[2][c]
-                        })
-                    }
-                    Albedo::Constant(c) => c,
-                };
-                for (c, a) in albedo.into_iter().enumerate() {
-                    surface.albedo[c][lane] = a;
-                }
-                block.column[lane] = x as u32;
-                block.ray_x[lane] = xr as f32;
-                block.len += 1;
-                if block.len == LANES {
+            }
+            // The set-up's planes along this row, in `u = x − x₀`.
+            let v = (y as i64 - sp.origin[1] as i64) as f64;
+            let inverse_depth = sp.inverse_depth.row(v);
+            let normal = sp.normal.map(|p| p.row(v));
+            let albedo = sp.albedo.map(|p| p.row(v));
+            let u0 = x as i64 - sp.origin[0] as i64;
+            let mut x0 = x;
+            while x0 < end {
+                if block.len + GROUP > LANES {
                     self.flush(block, yr as f32, yr2_plus_1 as f32, c_row);
                 }
+                // The next (up to) GROUP pixels of the span; lanes past the span's end are
+                // computed and written to the block but not counted.
+                let n = (end - x0).min(GROUP);
+                let us: [f64; GROUP] =
+                    std::array::from_fn(|l| (u0 + (x0 - x) as i64 + l as i64) as f64);
+                let inv_d = us.map(|u| 1.0 / inverse_depth.at(u));
+                let z: [f64; GROUP] = std::array::from_fn(|l| sp.edge_sum * inv_d[l]);
+                let xr: [f64; GROUP] = std::array::from_fn(|l| ((x0 + l) as f64 - k.cx) * inv_fx);
+                let value: [f32; GROUP] = std::array::from_fn(|l| {
+                    (match self.kind {
+                        DepthKind::Z => z[l],
+                        DepthKind::Ray => z[l] * (xr[l] * xr[l] + yr2_plus_1).sqrt(),
+                    }) as f32
+                });
+                // Lanes past the span's end go to pixels that later spans overwrite (a
+                // fixed-size copy is one store, a variable one a library call).
+                match d_row.get_mut(x0..x0 + GROUP) {
+                    Some(d) => d.copy_from_slice(&value),
+                    None => d_row[x0..x0 + n].copy_from_slice(&value[..n]),
+                }
+                let lanes = block.len..block.len + GROUP;
+                let surface = &mut block.surface;
+                for (line, out) in normal.iter().zip(&mut surface.normal) {
+                    for (l, out) in out[lanes.clone()].iter_mut().enumerate() {
+                        *out = (line.at(us[l]) * inv_d[l]) as f32;
+                    }
+                }
+                match self.albedo {
+                    Albedo::Texture { .. } => {
+                        for (line, out) in albedo.iter().zip(&mut block.texel) {
+                            for (l, out) in out[lanes.clone()].iter_mut().enumerate() {
+                                *out = line.at(us[l]) * inv_d[l];
+                            }
+                        }
+                    }
+                    Albedo::VertexColors => {
+                        for (line, out) in albedo.iter().zip(&mut surface.albedo) {
+                            for (l, out) in out[lanes.clone()].iter_mut().enumerate() {
+                                *out = (line.at(us[l]) * inv_d[l]) as f32;
+                            }
+                        }
+                    }
+                    Albedo::Constant(color) => {
+                        for (out, value) in surface.albedo.iter_mut().zip(color) {
+                            out[lanes.clone()].fill(value);
+                        }
+                    }
+                }
+                for (l, (column, ray_x)) in block.column[lanes.clone()]
+                    .iter_mut()
+                    .zip(&mut block.ray_x[lanes])
+                    .enumerate()
+                {
+                    *column = (x0 + l) as u32;
+                    *ray_x = xr[l] as f32;
+                }
+                block.len += n;
+                x0 += n;
             }
             x = end;
         }
@@ -283,6 +292,9 @@ impl DeferredPass<'_> {
     fn flush(&self, block: &mut Block, yr: f32, yr2_plus_1: f32, c_row: &mut [[f32; 3]]) {
         let m = block.len;
         let s = &mut block.surface;
+        if let Albedo::Texture { texture, wrap } = self.albedo {
+            texture.sample_rgb_lanes(&block.texel, m, wrap, &mut s.albedo);
+        }
         for k in 0..m {
             // The surface point is z · (x', y', 1) on this pixel's ray, so the unit view vector
             // (surface → eye) comes from the ray alone.

@@ -56,6 +56,17 @@ impl Edge {
         self.sign * (row - self.d[1] * (x - self.a[0]))
     }
 
+    /// `E` as an affine function about pixel centre `(x, y)`: `(E(x, y), ∂E/∂x, ∂E/∂y)`, the
+    /// value by [`Edge::eval`] (so exactly the scan's at that centre).
+    #[inline]
+    pub fn plane_at(&self, x: f64, y: f64) -> [f64; 3] {
+        [
+            self.eval(self.row(y), x),
+            -self.sign * self.d[1],
+            self.sign * self.d[0],
+        ]
+    }
+
     /// Whether a value `e = E(p)` puts `p` inside this edge's half-plane under the fill rule.
     #[inline(always)]
     pub fn inside(&self, e: f64) -> bool {
@@ -95,6 +106,10 @@ mod tests {
             e2.owns_ties(),
             "exactly one side owns centres on the edge"
         );
+        let [v, dx, dy] = e1.plane_at(3.0, 4.0);
+        let (du, dv) = (5.0, -2.0);
+        let direct = e1.eval(e1.row(4.0 + dv), 3.0 + du);
+        assert!((v + dx * du + dy * dv - direct).abs() <= 1e-12 * direct.abs());
         let (h1, h2) = (
             Edge::new([0.0, 1.0], [5.0, 1.0]),
             Edge::new([5.0, 1.0], [0.0, 1.0]),

@@ -5,7 +5,8 @@ use visage_camera::{DepthKind, DepthMap};
 use visage_mesh::TriMesh;
 
 use crate::camera::Camera;
-use crate::deferred::{Block, CornerAttributes, DeferredPass, Rows};
+use crate::deferred::{Block, DeferredPass, Rows, TileSetups};
+use crate::interpolation::SetupPlanes;
 use crate::mat4::{Mat3, Mat4};
 use crate::normals::{normal_matrix, transform_normal, vertex_normals_into};
 use crate::rasterize::{CullMode, Rasterizer, NO_TRIANGLE, TILE_ROWS};
@@ -110,8 +111,8 @@ pub struct Renderer {
     rasterizer: Rasterizer,
     object_normals: Vec<[f64; 3]>,
     camera_normals: Vec<[f32; 3]>,
-    /// Per set-up corner attributes, indexed like the rasteriser's set-up chunks.
-    corners: Vec<Vec<CornerAttributes>>,
+    /// Per tile, the interpolation planes of its set-ups (in bin order).
+    planes: Vec<Vec<SetupPlanes>>,
 }
 
 impl Renderer {
@@ -204,27 +205,10 @@ impl Renderer {
             .with_min_len(4096)
             .for_each(|(n, out)| *out = transform_normal(&nm, *n).map(|x| x as f32));
 
-        // Attributes at every set-up's corners, once per set-up (a set-up's pixels come in
-        // spans of about 3 on a few rows; doing this per span cost ~10% of the frame).
         let normals = &self.camera_normals;
-        let chunks = self.rasterizer.setup_chunks();
-        self.corners.resize_with(chunks.len(), Vec::new);
-        chunks
-            .par_iter()
-            .zip(self.corners.par_iter_mut())
-            .for_each(|(chunk, out)| {
-                out.clear();
-                out.extend(
-                    chunk
-                        .iter()
-                        .map(|st| CornerAttributes::new(st, mesh, normals, &scene.albedo)),
-                );
-            });
-
         // Steps 7–10: one reconstruction and shading evaluation per visible pixel, each tile
         // right after its scan, while its visibility buffer and set-ups are still in cache.
         let pass = DeferredPass {
-            corners: &self.corners,
             shader,
             albedo: scene.albedo,
             background: scene.background,
@@ -245,21 +229,39 @@ impl Renderer {
         } else {
             frame.barycentrics.chunks_mut(tile_len).collect()
         };
+        self.planes.resize_with(n_tiles, Vec::new);
         let tiles = frame
             .color
             .par_chunks_mut(tile_len)
             .zip(frame.depth.data.par_chunks_mut(tile_len))
             .zip(tri_tiles)
             .zip(bary_tiles)
-            .map(|(((color, depth), triangle), bary)| Rows {
-                color,
-                depth,
-                triangle,
-                bary,
+            .zip(self.planes.par_iter_mut())
+            .map(|((((color, depth), triangle), bary), planes)| {
+                let rows = Rows {
+                    color,
+                    depth,
+                    triangle,
+                    bary,
+                };
+                (rows, planes)
             });
         self.rasterizer
-            .scan_tiles(tiles, |out, row0, chunks, index| {
-                pass.shade_tile(&mut Block::default(), row0, chunks, index, out)
+            .scan_tiles(tiles, |(out, planes), row0, chunks, bin, index| {
+                // Step 7's interpolation planes of the tile's set-ups, computed here so that
+                // they are in cache for its pixels (a set-up overlapping two tiles is done
+                // twice; all of them up front were mostly out of cache by their turn).
+                planes.clear();
+                planes.extend(bin.iter().map(|&s| {
+                    let st = &chunks[(s >> 16) as usize][(s & 0xffff) as usize];
+                    SetupPlanes::new(st, mesh, normals, &scene.albedo)
+                }));
+                let tile = TileSetups {
+                    chunks,
+                    bin,
+                    planes,
+                };
+                pass.shade_tile(&mut Block::default(), row0, tile, index, out)
             });
         Ok(())
     }

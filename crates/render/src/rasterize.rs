@@ -18,6 +18,7 @@ use rayon::prelude::*;
 use crate::camera::Camera;
 use crate::clip::{clip_triangle, far_distance, near_distance, ClipVertex};
 use crate::edge::{signed_area2, Edge};
+use crate::interpolation::Plane;
 use crate::mat4::Mat4;
 use crate::projection::viewport;
 use crate::RenderError;
@@ -138,7 +139,7 @@ impl Rasterizer {
     ) -> Result<(), RenderError> {
         self.set_up(positions, triangles, model, camera, cull)?;
         let n_tiles = self.bins.len();
-        self.scan_tiles((0..n_tiles).into_par_iter(), |_, _, _, _| {});
+        self.scan_tiles((0..n_tiles).into_par_iter(), |_, _, _, _, _| {});
         Ok(())
     }
 
@@ -223,13 +224,15 @@ impl Rasterizer {
 
     /// The second half of [`Rasterizer::rasterize`]: tile-parallel scan conversion with depth
     /// test. Right after scanning tile `t` (rows `t · TILE_ROWS ..`), while its part of the
-    /// visibility buffer is still in cache, calls `then(item, row0, setup_chunks, index)` with
-    /// the `t`-th of `per_tile` (one item per tile), the tile's first row and its rows of the
-    /// visibility buffer.
+    /// visibility buffer is still in cache, calls `then(item, row0, setup_chunks, bin, index)`
+    /// with the `t`-th of `per_tile` (one item per tile), the tile's first row, the ids of the
+    /// set-ups that overlap the tile (in triangle order) and its rows of the visibility buffer
+    /// — which at that point hold *positions in `bin`* ([`NO_TRIANGLE`] for background), so
+    /// that per-tile data can be kept in a dense array; they are replaced by set-up ids after.
     pub(crate) fn scan_tiles<T: Send>(
         &mut self,
         per_tile: impl IndexedParallelIterator<Item = T>,
-        then: impl Fn(T, usize, &[Vec<ScreenTriangle>], &[u32]) + Sync,
+        then: impl Fn(T, usize, &[Vec<ScreenTriangle>], &[u32], &[u32]) + Sync,
     ) {
         let width = self.width as usize;
         let n_pixels = width * self.height as usize;
@@ -244,8 +247,12 @@ impl Rasterizer {
             .enumerate()
             .for_each(|(tile, ((depth, index), item))| {
                 let row0 = tile * TILE_ROWS;
-                scan_tile(chunks, &bins[tile], row0 as i32, width, depth, index);
-                then(item, row0, chunks, index);
+                let bin = &bins[tile];
+                scan_tile(chunks, bin, row0 as i32, width, depth, index);
+                then(item, row0, chunks, bin, index);
+                for s in index.iter_mut().filter(|s| **s != NO_TRIANGLE) {
+                    *s = bin[*s as usize];
+                }
             });
     }
 
@@ -276,12 +283,6 @@ impl Rasterizer {
     pub(crate) fn visibility_row(&self, y: usize) -> &[u32] {
         let w = self.width as usize;
         &self.index[y * w..(y + 1) * w]
-    }
-
-    /// The set-ups of the last frame by chunk: set-up id `s` is
-    /// `setup_chunks()[s >> 16][s & 0xffff]`.
-    pub(crate) fn setup_chunks(&self) -> &[Vec<ScreenTriangle>] {
-        &self.setup_chunks
     }
 
     /// The set-ups of the last frame, in triangle order (for coverage tests and custom passes).
@@ -353,6 +354,29 @@ impl ScreenTriangle {
     pub(crate) fn corner_bary(&self) -> &[[f32; 3]; 3] {
         &self.bary
     }
+
+    /// The top-left pixel `(x₀, y₀)` of the bounding box: the origin of
+    /// [`ScreenTriangle::perspective_planes`].
+    pub(crate) fn origin(&self) -> [i32; 2] {
+        [self.x0, self.y0]
+    }
+
+    /// `q_i = E_i / w_i` for the three corners as affine functions of the pixel centre about
+    /// [`ScreenTriangle::origin`], and `ΣE_i` there (twice the screen area).
+    ///
+    /// `E_i` is proportional to the screen-space barycentric `λ_i` and `1/w` is affine in
+    /// screen space, so each `q_i` is: `1/z = Σq_i / ΣE_i` and the perspective-correct weight
+    /// of corner `i` is `q_i / Σq_i` ([`crate::interpolation`]).
+    pub(crate) fn perspective_planes(&self) -> ([Plane; 3], f64) {
+        let (x, y) = (self.x0 as f64, self.y0 as f64);
+        let e = self.edges.map(|e| e.plane_at(x, y));
+        let planes = std::array::from_fn(|i| Plane {
+            c: e[i][0] * self.inv_w[i],
+            dx: e[i][1] * self.inv_w[i],
+            dy: e[i][2] * self.inv_w[i],
+        });
+        (planes, e[0][0] + e[1][0] + e[2][0])
+    }
 }
 
 /// Scan-converts the set-ups `bin` (ids into `chunks`) into one tile of the visibility buffer:
@@ -402,13 +426,13 @@ fn scan_tile_inline(
     depth.fill(f32::INFINITY);
     index.fill(NO_TRIANGLE);
     let row1 = row0 + (depth.len() / width) as i32 - 1;
-    for &s in bin {
+    for (k, &s) in bin.iter().enumerate() {
         let st = &chunks[(s >> 16) as usize][(s & 0xffff) as usize];
         scan(st, row0.max(st.y0), row1.min(st.y1), |x, y, z| {
             let p = (y - row0) as usize * width + x as usize;
             if z < depth[p] {
                 depth[p] = z;
-                index[p] = s;
+                index[p] = k as u32;
             }
         });
     }

@@ -3,6 +3,8 @@
 use std::path::Path;
 
 use crate::color::srgb_to_linear_u8;
+use crate::prefetch::prefetch;
+use crate::shading::LANES;
 use crate::RenderError;
 
 /// What happens to texture coordinates outside `[0, 1]`.
@@ -166,7 +168,9 @@ impl Texture {
     /// [`Texture::sample`] to `f32` rounding (≈ 10⁻⁷).
     #[cfg(test)]
     pub(crate) fn sample_rgb(&self, uv: [f64; 2], wrap: Wrap) -> [f32; 3] {
-        self.sample_rgb_at(self.texel_coords(uv), wrap)
+        let mut taps = TapLanes::default();
+        self.taps_at(self.texel_coords(uv), wrap, &mut taps, 0);
+        self.blend(&taps, 0)
     }
 
     /// Texel-space position of texture coordinates `uv`: `(u·W − ½, (1 − v)·H − ½)`, texel
@@ -179,25 +183,37 @@ impl Texture {
         ]
     }
 
-    /// [`Texture::sample_rgb`] at a texel-space position (see [`Texture::texel_coords`]).
+    /// The bilinear taps of [`Texture::sample_rgb`] at a texel-space position (see
+    /// [`Texture::texel_coords`]) into lane `k` of `taps`; no texel is read. Non-finite
+    /// positions give zero weights.
     #[inline(always)]
-    pub(crate) fn sample_rgb_at(&self, xy: [f64; 2], wrap: Wrap) -> [f32; 3] {
+    fn taps_at(&self, xy: [f64; 2], wrap: Wrap, taps: &mut TapLanes, k: usize) {
         let [x, y] = xy;
-        if !(x.is_finite() && y.is_finite()) {
-            return [0.0; 3];
-        }
-        let (w, h) = (self.width as i64, self.height as i64);
-        // floor without a libm call on baseline x86-64: truncate, then step down for negatives.
+        let finite = x.is_finite() && y.is_finite();
+        let (w, h) = (self.width as i32, self.height as i32);
+        // floor without a libm call on baseline x86-64 (and lane-parallel): truncate, then step
+        // down for negatives. Positions are clamped to ±10⁹ first, within `i32`.
         let floor = |v: f64| {
-            let t = v as i64;
-            t - (t as f64 > v) as i64
+            let t = v as i32;
+            t - (t as f64 > v) as i32
         };
         let (i0, i1, j0, j1, fx, fy) = match wrap {
             Wrap::Clamp => {
                 // Left of column 0 or right of column W − 1 both taps are the border texel
                 // whatever the weights: clamping the position to [-1, W − 1] first leaves the
                 // same sample and needs one bound per tap (likewise for rows).
-                let (x, y) = (x.clamp(-1.0, (w - 1) as f64), y.clamp(-1.0, (h - 1) as f64));
+                // Non-finite positions (zero weight below) go to texel (0, 0).
+                let (x, y) = if finite {
+                    (x.clamp(-1.0, (w - 1) as f64), y.clamp(-1.0, (h - 1) as f64))
+                } else {
+                    (0.0, 0.0)
+                };
+                // The plain conversion (no saturation or NaN handling) vectorises.
+                let floor = |v: f64| {
+                    // SAFETY: `v` is finite and within [-1, max(W, H) − 1] ⊂ i32.
+                    let t = unsafe { v.to_int_unchecked::<i32>() };
+                    t - (t as f64 > v) as i32
+                };
                 let (i, j) = (floor(x), floor(y));
                 let (fx, fy) = ((x - i as f64) as f32, (y - j as f64) as f32);
                 (
@@ -210,7 +226,7 @@ impl Texture {
                 )
             }
             Wrap::Repeat => {
-                // Beyond ±2³⁰ texels any position has long repeated.
+                // Beyond ±10⁹ texels any position has long repeated.
                 let (x, y) = (x.clamp(-1e9, 1e9), y.clamp(-1e9, 1e9));
                 let (i, j) = (floor(x), floor(y));
                 let (fx, fy) = ((x - i as f64) as f32, (y - j as f64) as f32);
@@ -224,20 +240,116 @@ impl Texture {
                 )
             }
         };
-        let (r0, r1) = ((j0 * w) as usize, (j1 * w) as usize);
-        let (i0, i1) = (i0 as usize, i1 as usize);
-        let s = 1.0 / TEXEL_MAX;
-        let taps = [
-            (r0 + i0, (1.0 - fx) * (1.0 - fy) * s),
-            (r0 + i1, fx * (1.0 - fy) * s),
-            (r1 + i0, (1.0 - fx) * fy * s),
-            (r1 + i1, fx * fy * s),
+        taps.column[0][k] = i0;
+        taps.column[1][k] = i1;
+        taps.row[0][k] = j0;
+        taps.row[1][k] = j1;
+        // NaN positions: zero weights (and `NaN as i32 = 0`, a valid texel).
+        taps.fx[k] = if finite { fx } else { 0.0 };
+        taps.fy[k] = if finite { fy } else { 0.0 };
+        taps.scale[k] = if finite { 1.0 / TEXEL_MAX } else { 0.0 };
+    }
+
+    /// The RGB sample of lane `k` of `taps`: the weighted sum of its four texels.
+    #[inline(always)]
+    fn blend(&self, taps: &TapLanes, k: usize) -> [f32; 3] {
+        let w = self.width as usize;
+        let (fx, fy, s) = (taps.fx[k], taps.fy[k], taps.scale[k]);
+        let (i0, i1) = (taps.column[0][k] as usize, taps.column[1][k] as usize);
+        let (r0, r1) = (taps.row[0][k] as usize * w, taps.row[1][k] as usize * w);
+        let index = [r0 + i0, r0 + i1, r1 + i0, r1 + i1];
+        let weight = [
+            (1.0 - fx) * (1.0 - fy) * s,
+            fx * (1.0 - fy) * s,
+            (1.0 - fx) * fy * s,
+            fx * fy * s,
         ];
         // Tap by tap over all four channels, although alpha is dropped: one SIMD register (one
         // widening conversion and multiply-add per tap). `0 + a` is exact, so the sum is
         // `w₀₀t₀₀ + w₁₀t₁₀ + w₀₁t₀₁ + w₁₁t₁₁` in this order, whichever way it is computed.
-        let rgba = weighted_sum(taps.map(|(index, _)| self.texels[index]), taps.map(|t| t.1));
+        let rgba = weighted_sum(index.map(|i| self.texels[i]), weight);
         [rgba[0], rgba[1], rgba[2]]
+    }
+
+    /// [`Texture::sample_rgb`] of the first `m` texel-space positions `xy` (`[axis][lane]`, see
+    /// [`Texture::texel_coords`]) into `out` (`[channel][lane]`).
+    ///
+    /// All taps are located before any texel is read (lane-parallel arithmetic for clamping),
+    /// so that the texel loads of the lanes are independent and overlap: sampled one by one,
+    /// each sample's cache misses (a large texture does not fit in cache) stalled the work
+    /// behind it.
+    ///
+    /// # Panics
+    /// If `m > LANES`.
+    #[inline(always)]
+    pub(crate) fn sample_rgb_lanes(
+        &self,
+        xy: &[[f64; LANES]; 2],
+        m: usize,
+        wrap: Wrap,
+        out: &mut [[f32; LANES]; 3],
+    ) {
+        let mut taps = TapLanes::default();
+        let m = m.min(LANES);
+        // One loop per wrap mode, so that each is branch-free (plain loops: a closure here was
+        // compiled out of line, without the caller's AVX2); the clamped one is lane-parallel.
+        let positions = xy[0][..m].iter().zip(&xy[1][..m]).enumerate();
+        match wrap {
+            Wrap::Clamp => {
+                for (k, (&x, &y)) in positions {
+                    self.taps_at([x, y], Wrap::Clamp, &mut taps, k);
+                }
+            }
+            Wrap::Repeat => {
+                for (k, (&x, &y)) in positions {
+                    self.taps_at([x, y], Wrap::Repeat, &mut taps, k);
+                }
+            }
+        }
+        // Every lane's two texel rows start loading before the first is read.
+        let w = self.width as usize;
+        for k in 0..m {
+            for row in &taps.row {
+                if let Some(texel) = self
+                    .texels
+                    .get(row[k] as usize * w + taps.column[0][k] as usize)
+                {
+                    prefetch(texel);
+                }
+            }
+        }
+        let [r, g, b] = out;
+        for (k, ((r, g), b)) in r[..m]
+            .iter_mut()
+            .zip(&mut g[..m])
+            .zip(&mut b[..m])
+            .enumerate()
+        {
+            [*r, *g, *b] = self.blend(&taps, k);
+        }
+    }
+}
+
+/// Bilinear taps of [`LANES`] samples (structure of arrays): texel columns `i, i + 1` and rows
+/// `j, j + 1` after wrapping, the fractional position, and the 16-bit scale (0 for a
+/// non-finite position).
+struct TapLanes {
+    column: [[i32; LANES]; 2],
+    row: [[i32; LANES]; 2],
+    fx: [f32; LANES],
+    fy: [f32; LANES],
+    scale: [f32; LANES],
+}
+
+impl Default for TapLanes {
+    fn default() -> Self {
+        TapLanes {
+            column: [[0; LANES]; 2],
+            row: [[0; LANES]; 2],
+            fx: [0.0; LANES],
+            fy: [0.0; LANES],
+            scale: [0.0; LANES],
+        }
     }
 }
 

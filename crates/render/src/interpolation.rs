@@ -1,0 +1,127 @@
+//! Perspective-correct interpolation with affine functions of the pixel centre: step 7 of
+//! Algorithm 3.
+//!
+//! A set-up's edge functions `E_i` are affine in screen space and proportional to the
+//! screen-space barycentrics `λ_i`, and `1/w` is affine there too. Hence `q_i = E_i / w_i` is
+//! affine, `D = Σ q_i = ΣE / z`, and an attribute with corner values `a_i` has the
+//! perspective-correct value `a = Σ a_i q_i / D` — its numerator `Σ a_i q_i` is one more affine
+//! function. So each set-up gets one [`Plane`] per attribute channel, and a pixel costs one
+//! division (`1/D`, shared by every channel) and a multiply-add and a multiply per channel.
+
+use visage_mesh::TriMesh;
+
+use crate::frame::Albedo;
+use crate::rasterize::ScreenTriangle;
+
+/// An affine function of the pixel centre `(x, y)`: `c + dx·(x − x₀) + dy·(y − y₀)` about the
+/// origin `(x₀, y₀)` of its set-up ([`SetupPlanes::origin`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Plane {
+    pub c: f64,
+    pub dx: f64,
+    pub dy: f64,
+}
+
+impl Plane {
+    /// `Σ a_i · planes_i`.
+    #[inline(always)]
+    fn combine(planes: &[Plane; 3], a: [f64; 3]) -> Plane {
+        let [p, q, r] = planes;
+        Plane {
+            c: a[0] * p.c + a[1] * q.c + a[2] * r.c,
+            dx: a[0] * p.dx + a[1] * q.dx + a[2] * r.dx,
+            dy: a[0] * p.dy + a[1] * q.dy + a[2] * r.dy,
+        }
+    }
+
+    /// The function along row `v = y − y₀`: its value at `x = x₀` and its slope.
+    #[inline(always)]
+    pub fn row(&self, v: f64) -> RowLine {
+        RowLine {
+            at_origin: self.c + self.dy * v,
+            dx: self.dx,
+        }
+    }
+}
+
+/// A [`Plane`] restricted to one pixel row: `at_origin + dx · u` with `u = x − x₀`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RowLine {
+    at_origin: f64,
+    dx: f64,
+}
+
+impl RowLine {
+    /// The value at `u = x − x₀`.
+    #[inline(always)]
+    pub fn at(&self, u: f64) -> f64 {
+        self.at_origin + self.dx * u
+    }
+}
+
+/// Everything a visible pixel of one set-up needs, as planes: depth, normal and albedo source.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SetupPlanes {
+    /// `(x₀, y₀)`: the top-left pixel of the set-up's bounding box.
+    pub origin: [i32; 2],
+    /// `ΣE_i`, so that `z = ΣE / D`.
+    pub edge_sum: f64,
+    /// `D = Σ q_i`.
+    pub inverse_depth: Plane,
+    /// Numerators of the camera-space vertex normal (not normalised).
+    pub normal: [Plane; 3],
+    /// Numerators of the albedo source: texel-space position ([`crate::Texture::texel_coords`],
+    /// first two) for a textured albedo, linear RGB for vertex colours, unused for a constant.
+    pub albedo: [Plane; 3],
+}
+
+impl SetupPlanes {
+    /// The planes of set-up `st` of `mesh`, with camera-space vertex normals `normals`. Indices
+    /// must be valid (meshes are validated before rasterisation).
+    #[inline(always)]
+    pub(crate) fn new(
+        st: &ScreenTriangle,
+        mesh: &TriMesh,
+        normals: &[[f32; 3]],
+        albedo: &Albedo<'_>,
+    ) -> SetupPlanes {
+        let t = mesh.triangles[st.triangle() as usize].map(|i| i as usize);
+        let (q, edge_sum) = st.perspective_planes();
+        // Corner `i` of the set-up is the point `Σ_j B_ij v_j` of the mesh triangle, so
+        // `Σ_i a_i q_i = Σ_j A_j Σ_i B_ij q_i`: one plane per mesh vertex `j`, then one
+        // combination per channel.
+        let bc = st.corner_bary().map(|b| b.map(f64::from));
+        let vertex: [Plane; 3] =
+            std::array::from_fn(|j| Plane::combine(&q, [bc[0][j], bc[1][j], bc[2][j]]));
+        // One channel's plane from its values at the mesh triangle's vertices.
+        let channel = |a0: f64, a1: f64, a2: f64| Plane::combine(&vertex, [a0, a1, a2]);
+        let albedo = match albedo {
+            Albedo::Texture { texture, .. } => {
+                let [p0, p1, p2] = [t[0], t[1], t[2]].map(|i| texture.texel_coords(mesh.uvs[i]));
+                [
+                    channel(p0[0], p1[0], p2[0]),
+                    channel(p0[1], p1[1], p2[1]),
+                    Plane::default(),
+                ]
+            }
+            Albedo::VertexColors => {
+                let [c0, c1, c2] = [t[0], t[1], t[2]].map(|i| mesh.colors[i]);
+                [0, 1, 2].map(|c| channel(c0[c].into(), c1[c].into(), c2[c].into()))
+            }
+            Albedo::Constant(_) => [Plane::default(); 3],
+        };
+        let [n0, n1, n2] = [normals[t[0]], normals[t[1]], normals[t[2]]];
+        let normal = [
+            channel(n0[0].into(), n1[0].into(), n2[0].into()),
+            channel(n0[1].into(), n1[1].into(), n2[1].into()),
+            channel(n0[2].into(), n1[2].into(), n2[2].into()),
+        ];
+        SetupPlanes {
+            origin: st.origin(),
+            edge_sum,
+            inverse_depth: Plane::combine(&q, [1.0; 3]),
+            normal,
+            albedo,
+        }
+    }
+}
