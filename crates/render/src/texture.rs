@@ -203,8 +203,9 @@ impl Texture {
                 // whatever the weights: clamping the position to [-1, W − 1] first leaves the
                 // same sample and needs one bound per tap (likewise for rows).
                 // Non-finite positions (zero weight below) go to texel (0, 0).
+                // (`max`/`min`, not `clamp`, which may panic and so does not vectorise.)
                 let (x, y) = if finite {
-                    (x.clamp(-1.0, (w - 1) as f64), y.clamp(-1.0, (h - 1) as f64))
+                    (x.max(-1.0).min((w - 1) as f64), y.max(-1.0).min((h - 1) as f64))
                 } else {
                     (0.0, 0.0)
                 };
@@ -293,16 +294,19 @@ impl Texture {
         let m = m.min(LANES);
         // One loop per wrap mode, so that each is branch-free (plain loops: a closure here was
         // compiled out of line, without the caller's AVX2); the clamped one is lane-parallel.
-        let positions = xy[0][..m].iter().zip(&xy[1][..m]).enumerate();
+        // `k < m ≤ LANES` is visible to the compiler here, so the lane stores need no bounds
+        // checks and the clamped loop vectorises.
         match wrap {
             Wrap::Clamp => {
-                for (k, (&x, &y)) in positions {
-                    self.taps_at([x, y], Wrap::Clamp, &mut taps, k);
+                #[allow(clippy::needless_range_loop)]
+                for k in 0..m {
+                    self.taps_at([xy[0][k], xy[1][k]], Wrap::Clamp, &mut taps, k);
                 }
             }
             Wrap::Repeat => {
-                for (k, (&x, &y)) in positions {
-                    self.taps_at([x, y], Wrap::Repeat, &mut taps, k);
+                #[allow(clippy::needless_range_loop)]
+                for k in 0..m {
+                    self.taps_at([xy[0][k], xy[1][k]], Wrap::Repeat, &mut taps, k);
                 }
             }
         }
