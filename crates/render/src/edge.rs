@@ -2,6 +2,11 @@
 //! bit-identical, opposite decisions at every pixel centre (watertight coverage in `f64` without
 //! fixed-point snapping).
 
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::{
+    __m256d, _mm256_cmp_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_sub_pd, _CMP_GE_OQ,
+};
+
 /// An oriented triangle edge `a → b` in pixel coordinates, stored canonically.
 ///
 /// `E(p) = sign · ((b_c − a_c) × (p − a_c))` where `(a_c, b_c)` is the edge's endpoint pair in
@@ -79,6 +84,28 @@ impl Edge {
     #[cfg(test)]
     fn owns_ties(&self) -> bool {
         self.min_inside == 0.0
+    }
+}
+
+/// Four-lane twins of [`Edge::eval`] and [`Edge::inside`] for four pixel centres of one row
+/// (AVX): lane by lane the same operations in the same order, so the same bits.
+#[cfg(target_arch = "x86_64")]
+impl Edge {
+    /// `E` at the centres `x` of one row, `row = self.row(y)` in every lane.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    pub(crate) fn eval_x4(&self, row: __m256d, x: __m256d) -> __m256d {
+        let t = _mm256_sub_pd(x, _mm256_set1_pd(self.a[0]));
+        let v = _mm256_sub_pd(row, _mm256_mul_pd(_mm256_set1_pd(self.d[1]), t));
+        _mm256_mul_pd(_mm256_set1_pd(self.sign), v)
+    }
+
+    /// All bits set in the lanes whose value `e = E(p)` puts `p` inside (`e ≥ min_inside`, an
+    /// ordered comparison: false for NaN).
+    #[inline]
+    #[target_feature(enable = "avx")]
+    pub(crate) fn inside_x4(&self, e: __m256d) -> __m256d {
+        _mm256_cmp_pd::<_CMP_GE_OQ>(e, _mm256_set1_pd(self.min_inside))
     }
 }
 

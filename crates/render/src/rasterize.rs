@@ -6,12 +6,15 @@
 //!    planes ([`crate::clip`]), divided by `w`, mapped by the viewport, and set up as a
 //!    [`ScreenTriangle`] (edge functions, `1/w` at the corners, bounding box);
 //! 3. the set-ups are binned into horizontal tiles of [`TILE_ROWS`] image rows; tiles are
-//!    rasterised in parallel (rayon), each owning its slice of the z-buffer.
+//!    rasterised in parallel (rayon), each owning its slice of the visibility buffer and
+//!    scanned into its worker thread's tile-sized z-buffer.
 //!
 //! The result is a *visibility buffer*: per pixel the camera `z` of the nearest surface and the
 //! set-up that produced it. Attributes (exact depth, barycentrics, normals, UVs) are reconstructed
 //! once per visible pixel afterwards ([`Rasterizer::fragment`]), so overdraw costs only the depth
 //! test. Depth ties are won by the lower triangle index, independently of the thread schedule.
+
+use std::cell::RefCell;
 
 use rayon::prelude::*;
 
@@ -23,7 +26,7 @@ use crate::mat4::Mat4;
 use crate::projection::viewport;
 use crate::RenderError;
 
-/// Image rows per tile: the unit of parallel work and of z-buffer ownership.
+/// Image rows per tile: the unit of parallel work and of visibility-buffer ownership.
 pub const TILE_ROWS: usize = 16;
 
 /// Triangles per parallel set-up task (at least; grows for huge meshes so that the chunk count
@@ -89,7 +92,7 @@ pub struct Fragment {
 
 /// Reusable rasteriser state: per-vertex transforms, triangle set-ups, tile bins and the
 /// visibility buffer. Create once, call [`Rasterizer::rasterize`] per frame (no allocation once
-/// the buffers have grown to the frame's size).
+/// the buffers, and each worker thread's tile z-buffer, have grown to the frame's size).
 #[derive(Debug, Default)]
 pub struct Rasterizer {
     width: u32,
@@ -98,7 +101,6 @@ pub struct Rasterizer {
     clip: Vec<[f64; 4]>,
     setup_chunks: Vec<Vec<ScreenTriangle>>,
     bins: Vec<Vec<u32>>,
-    depth: Vec<f32>,
     index: Vec<u32>,
 }
 
@@ -236,19 +238,21 @@ impl Rasterizer {
     ) {
         let width = self.width as usize;
         let n_pixels = width * self.height as usize;
-        self.depth.resize(n_pixels, f32::INFINITY);
         self.index.resize(n_pixels, NO_TRIANGLE);
         let tile_len = TILE_ROWS * width;
         let (chunks, bins) = (&self.setup_chunks, &self.bins);
-        self.depth
+        self.index
             .par_chunks_mut(tile_len)
-            .zip(self.index.par_chunks_mut(tile_len))
             .zip(per_tile)
             .enumerate()
-            .for_each(|(tile, ((depth, index), item))| {
+            .for_each(|(tile, (index, item))| {
                 let row0 = tile * TILE_ROWS;
                 let bin = &bins[tile];
-                scan_tile(chunks, bin, row0 as i32, width, depth, index);
+                TILE_DEPTH.with_borrow_mut(|depth| {
+                    depth.resize(tile_len, f32::INFINITY);
+                    let depth = &mut depth[..index.len()];
+                    scan_tile(chunks, bin, row0 as i32, width, depth, index);
+                });
                 then(item, row0, chunks, bin, index);
                 for s in index.iter_mut().filter(|s| **s != NO_TRIANGLE) {
                     *s = bin[*s as usize];
@@ -379,11 +383,20 @@ impl ScreenTriangle {
     }
 }
 
+thread_local! {
+    /// The z-buffer of the tile a thread is scanning ([`Rasterizer::scan_tiles`]): depths are
+    /// not needed once a tile is scanned, and one tile-sized buffer per thread stays in cache
+    /// where a whole-frame one would come from memory every frame.
+    static TILE_DEPTH: RefCell<Vec<f32>> = const { RefCell::new(Vec::new()) };
+}
+
 /// Scan-converts the set-ups `bin` (ids into `chunks`) into one tile of the visibility buffer:
-/// `depth` and `index` hold whole image rows of `width` pixels from row `row0` on.
+/// `depth` and `index` hold whole image rows of `width` pixels from row `row0` on; `index`
+/// receives positions in `bin`.
 ///
-/// On x86-64 CPUs with AVX2 this is compiled a second time for them and chosen at run time;
-/// Rust never fuses or reorders floating-point operations, so coverage and depth are identical.
+/// On x86-64 CPUs with AVX2 this runs [`scan_avx2`] (four pixels at a time), chosen at run time;
+/// it performs lane by lane the operations of [`scan`] and Rust never fuses or reorders
+/// floating-point operations, so coverage and depth are identical.
 fn scan_tile(
     chunks: &[Vec<ScreenTriangle>],
     bin: &[u32],
@@ -398,7 +411,7 @@ fn scan_tile(
         unsafe { scan_tile_avx2(chunks, bin, row0, width, depth, index) };
         return;
     }
-    scan_tile_inline(chunks, bin, row0, width, depth, index);
+    scan_tile_scalar(chunks, bin, row0, width, depth, index);
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -411,11 +424,19 @@ fn scan_tile_avx2(
     depth: &mut [f32],
     index: &mut [u32],
 ) {
-    scan_tile_inline(chunks, bin, row0, width, depth, index);
+    for_each_setup(
+        chunks,
+        bin,
+        row0,
+        width,
+        depth,
+        index,
+        |st, s, y0, y1, depth, index| scan_avx2(st, s, y0, y1, row0, width, depth, index),
+    );
 }
 
-#[inline(always)]
-fn scan_tile_inline(
+/// [`scan_tile`] one pixel at a time, on any CPU.
+fn scan_tile_scalar(
     chunks: &[Vec<ScreenTriangle>],
     bin: &[u32],
     row0: i32,
@@ -423,18 +444,135 @@ fn scan_tile_inline(
     depth: &mut [f32],
     index: &mut [u32],
 ) {
+    for_each_setup(
+        chunks,
+        bin,
+        row0,
+        width,
+        depth,
+        index,
+        |st, s, y0, y1, depth, index| {
+            scan(st, y0, y1, |x, y, z| {
+                let p = (y - row0) as usize * width + x as usize;
+                // Step 7 of Algorithm 3; strict `<`, so of equal depths the first set-up scanned
+                // (the lower triangle index) wins.
+                if z < depth[p] {
+                    depth[p] = z;
+                    index[p] = s;
+                }
+            })
+        },
+    );
+}
+
+/// Clears the tile (`depth` to `∞`, `index` to [`NO_TRIANGLE`]) and calls
+/// `scan_setup(st, k, y0, y1, depth, index)` for the set-ups of `bin` in order, with `k` the
+/// position in `bin` (what the tile's visibility buffer stores, see
+/// [`Rasterizer::scan_tiles`]) and the rows `y0..=y1` of set-up `st` in the tile.
+#[inline(always)]
+fn for_each_setup(
+    chunks: &[Vec<ScreenTriangle>],
+    bin: &[u32],
+    row0: i32,
+    width: usize,
+    depth: &mut [f32],
+    index: &mut [u32],
+    mut scan_setup: impl FnMut(&ScreenTriangle, u32, i32, i32, &mut [f32], &mut [u32]),
+) {
     depth.fill(f32::INFINITY);
     index.fill(NO_TRIANGLE);
     let row1 = row0 + (depth.len() / width) as i32 - 1;
     for (k, &s) in bin.iter().enumerate() {
         let st = &chunks[(s >> 16) as usize][(s & 0xffff) as usize];
-        scan(st, row0.max(st.y0), row1.min(st.y1), |x, y, z| {
-            let p = (y - row0) as usize * width + x as usize;
-            if z < depth[p] {
-                depth[p] = z;
-                index[p] = k as u32;
+        scan_setup(st, k as u32, row0.max(st.y0), row1.min(st.y1), depth, index);
+    }
+}
+
+/// Steps 5–7 of Algorithm 3 for set-up `st` (id `s`), four pixel centres of a row at a time:
+/// coverage under the fill rule, depth and depth test of rows `y0..=y1` in the tile of
+/// [`scan_tile`] (`depth` and `index` hold image rows of `width` pixels from row `row0` on).
+///
+/// Lane by lane the operations of [`scan`] and of the depth test of [`scan_tile_scalar`] (the
+/// [`Edge`] twins, then `z = Σe / Σ(e_i / w_i)` in the same order, rounded to `f32`, strict `<`),
+/// so coverage, depths and tie-breaking are bit-identical.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
+fn scan_avx2(
+    st: &ScreenTriangle,
+    s: u32,
+    y0: i32,
+    y1: i32,
+    row0: i32,
+    width: usize,
+    depth: &mut [f32],
+    index: &mut [u32],
+) {
+    use std::arch::x86_64::*;
+    let [e0, e1, e2] = &st.edges;
+    let [w0, w1, w2] = st.inv_w.map(|w| _mm256_set1_pd(w));
+    // Pixel coordinates are integers far below 2⁵³: `x0 + l` and the steps of 4 are exact.
+    let x_first = _mm256_add_pd(
+        _mm256_set1_pd(st.x0 as f64),
+        _mm256_setr_pd(0.0, 1.0, 2.0, 3.0),
+    );
+    let x_last = _mm256_set1_pd(st.x1 as f64);
+    let step = _mm256_set1_pd(4.0);
+    // The low 32 bits of each 64-bit lane, to narrow a lane mask of `f64` to one of `f32`.
+    let low_halves = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
+    let id = _mm_set1_epi32(s as i32);
+    // The bounding box is clamped to the image, so `0 ≤ x0 ≤ x1 < width`.
+    let (x0, x1) = (st.x0 as usize, st.x1 as usize);
+    for y in y0..=y1 {
+        let yf = y as f64;
+        let (r0, r1, r2) = (e0.row(yf), e1.row(yf), e2.row(yf));
+        let (r0, r1, r2) = (_mm256_set1_pd(r0), _mm256_set1_pd(r1), _mm256_set1_pd(r2));
+        // The span `x0..=x1` of row `y`.
+        let p = (y - row0) as usize * width;
+        let (depth, index) = (&mut depth[p + x0..=p + x1], &mut index[p + x0..=p + x1]);
+        let mut x = x_first;
+        let mut in_run = false;
+        for o in (0..depth.len()).step_by(4) {
+            let (a, b, c) = (e0.eval_x4(r0, x), e1.eval_x4(r1, x), e2.eval_x4(r2, x));
+            // Inside all three edges and the bounding box.
+            let covered = _mm256_and_pd(
+                _mm256_and_pd(e0.inside_x4(a), e1.inside_x4(b)),
+                _mm256_and_pd(e2.inside_x4(c), _mm256_cmp_pd::<_CMP_LE_OQ>(x, x_last)),
+            );
+            let bits = _mm256_movemask_pd(covered);
+            if bits != 0 {
+                let sum = _mm256_add_pd(_mm256_add_pd(a, b), c);
+                let q = _mm256_add_pd(
+                    _mm256_add_pd(_mm256_mul_pd(a, w0), _mm256_mul_pd(b, w1)),
+                    _mm256_mul_pd(c, w2),
+                );
+                // Rounded to nearest like `as f32` (Rust keeps the default rounding mode).
+                let z = _mm256_cvtpd_ps(_mm256_div_pd(sum, q));
+                let covered = _mm256_castps256_ps128(_mm256_permutevar8x32_ps(
+                    _mm256_castpd_ps(covered),
+                    low_halves,
+                ));
+                // SAFETY: `o < depth.len() = index.len()`, and the masked loads and stores touch
+                // only covered lanes `o + l`, which lie in the bounding box (`x ≤ x1`), so in
+                // the span (`o + l < depth.len()`).
+                unsafe {
+                    let (d, i) = (depth.as_mut_ptr().add(o), index.as_mut_ptr().add(o));
+                    let old = _mm_maskload_ps(d, _mm_castps_si128(covered));
+                    let nearer = _mm_castps_si128(_mm_and_ps(_mm_cmplt_ps(z, old), covered));
+                    _mm_maskstore_ps(d, nearer, z);
+                    _mm_maskstore_epi32(i.cast(), nearer, id);
+                }
+                // The covered centres of a row are one run (see `scan`): it ends in this group
+                // unless the last lane is covered, else at the next group that covers none.
+                if bits & 8 == 0 {
+                    break;
+                }
+                in_run = true;
+            } else if in_run {
+                break;
             }
-        });
+            x = _mm256_add_pd(x, step);
+        }
     }
 }
 
@@ -549,5 +687,102 @@ fn setup_triangle(
             triangle: id,
             front_facing,
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{Rng, SeedableRng};
+    use visage_camera::Intrinsics;
+
+    use super::*;
+
+    /// A soup of small, large, near-clipped and duplicated triangles over a shared-edge grid,
+    /// in front of a camera at the origin.
+    fn soup(rng: &mut impl Rng) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        let mut push = |corners: [[f64; 3]; 3]| {
+            let i = positions.len() as u32;
+            positions.extend(corners);
+            triangles.push([i, i + 1, i + 2]);
+        };
+        for k in 0..3000 {
+            // Mostly small triangles (a few pixels); a few large ones behind them, and a few
+            // crossing the near plane.
+            let (size, z) = match k % 100 {
+                0 => (1.0, rng.random_range(3.0..4.0)),
+                1 => (0.5, 0.3),
+                _ => (0.04, rng.random_range(1.0..3.0)),
+            };
+            let centre = [rng.random_range(-1.1..1.1), rng.random_range(-0.4..0.4), z];
+            push(std::array::from_fn(|_| {
+                std::array::from_fn(|c| centre[c] + size * rng.random_range(-1.0..1.0))
+            }));
+        }
+        // Duplicates, also with the corners rotated: (nearly) equal depths, won by the lower
+        // triangle index.
+        let n = triangles.len();
+        for t in (0..n).step_by(7) {
+            let [a, b, c] = triangles[t];
+            triangles.extend([[a, b, c], [b, c, a]]);
+        }
+        // A grid of shared edges with vertices near pixel centres.
+        let base = positions.len() as u32;
+        for j in 0..=8 {
+            for i in 0..=12 {
+                positions.push([-0.9 + 0.15 * i as f64, -0.5 + 0.125 * j as f64, 2.5]);
+            }
+        }
+        for j in 0..8 {
+            for i in 0..12 {
+                let v = base + j * 13 + i;
+                triangles.push([v, v + 1, v + 14]);
+                triangles.push([v, v + 14, v + 13]);
+            }
+        }
+        (positions, triangles)
+    }
+
+    #[test]
+    fn avx2_scan_matches_the_scalar_scan_bit_for_bit() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let (positions, triangles) = soup(&mut rng);
+        // Odd width and a partial last tile exercise the ends of spans and of the buffer.
+        let k = Intrinsics::new(333, 101, 150.0, 150.0, 166.0, 50.0).unwrap();
+        let camera = Camera::new(k).unwrap();
+        let mut r = Rasterizer::new();
+        r.set_up(
+            &positions,
+            &triangles,
+            &Mat4::IDENTITY,
+            &camera,
+            CullMode::None,
+        )
+        .unwrap();
+        let width = k.width as usize;
+        let n_pixels = width * k.height as usize;
+        let (mut depth, mut index) = (vec![0.0; n_pixels], vec![0; n_pixels]);
+        let (mut depth_scalar, mut index_scalar) = (vec![0.0; n_pixels], vec![0; n_pixels]);
+        let tiles = depth
+            .chunks_mut(TILE_ROWS * width)
+            .zip(index.chunks_mut(TILE_ROWS * width))
+            .zip(depth_scalar.chunks_mut(TILE_ROWS * width))
+            .zip(index_scalar.chunks_mut(TILE_ROWS * width));
+        for (t, (((d, i), ds), is)) in tiles.enumerate() {
+            let (bin, row0) = (&r.bins[t], (t * TILE_ROWS) as i32);
+            scan_tile(&r.setup_chunks, bin, row0, width, d, i);
+            scan_tile_scalar(&r.setup_chunks, bin, row0, width, ds, is);
+        }
+        let covered = index.iter().filter(|&&s| s != NO_TRIANGLE).count();
+        assert!(covered > n_pixels / 2, "{covered} of {n_pixels} covered");
+        for p in 0..n_pixels {
+            assert_eq!(index[p], index_scalar[p], "set-up at pixel {p}");
+            assert_eq!(
+                depth[p].to_bits(),
+                depth_scalar[p].to_bits(),
+                "depth at pixel {p}"
+            );
+        }
     }
 }

@@ -205,7 +205,10 @@ impl Texture {
                 // Non-finite positions (zero weight below) go to texel (0, 0).
                 // (`max`/`min`, not `clamp`, which may panic and so does not vectorise.)
                 let (x, y) = if finite {
-                    (x.max(-1.0).min((w - 1) as f64), y.max(-1.0).min((h - 1) as f64))
+                    (
+                        x.max(-1.0).min((w - 1) as f64),
+                        y.max(-1.0).min((h - 1) as f64),
+                    )
                 } else {
                     (0.0, 0.0)
                 };
@@ -297,13 +300,15 @@ impl Texture {
         // `k < m ≤ LANES` is visible to the compiler here, so the lane stores need no bounds
         // checks and the clamped loop vectorises.
         match wrap {
-            Wrap::Clamp => {
+            Wrap::Clamp =>
+            {
                 #[allow(clippy::needless_range_loop)]
                 for k in 0..m {
                     self.taps_at([xy[0][k], xy[1][k]], Wrap::Clamp, &mut taps, k);
                 }
             }
-            Wrap::Repeat => {
+            Wrap::Repeat =>
+            {
                 #[allow(clippy::needless_range_loop)]
                 for k in 0..m {
                     self.taps_at([xy[0][k], xy[1][k]], Wrap::Repeat, &mut taps, k);
