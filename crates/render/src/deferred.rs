@@ -14,6 +14,7 @@ use crate::frame::Albedo;
 use crate::interpolation::SetupPlanes;
 use crate::rasterize::{ScreenTriangle, NO_TRIANGLE};
 use crate::shading::{BlinnPhong, SurfaceLanes, LANES};
+use crate::texture::TapLanes;
 
 /// Pixels of a span evaluated together (four `f64` lanes: one AVX2 register).
 const GROUP: usize = 4;
@@ -60,6 +61,8 @@ pub(crate) struct Block {
     ray_x: [f32; LANES],
     /// Their texel-space positions (textured albedo only, sampled at flush).
     texel: [[f64; LANES]; 2],
+    /// Scratch of the texture sampling.
+    taps: TapLanes,
     /// `normal`: interpolated, not yet normalised; `albedo`: final; `view`: filled at flush.
     surface: SurfaceLanes,
 }
@@ -71,6 +74,7 @@ impl Default for Block {
             column: [0; LANES],
             ray_x: [0.0; LANES],
             texel: [[0.0; LANES]; 2],
+            taps: TapLanes::default(),
             surface: SurfaceLanes::default(),
         }
     }
@@ -86,8 +90,8 @@ pub(crate) struct Rows<'a> {
 }
 
 impl DeferredPass<'_> {
-    /// Shades the tile of image rows from `row0` on whose visibility buffer is `index` (set-up
-    /// ids into `chunks`) into `out`.
+    /// Shades the tile of image rows from `row0` on whose visibility buffer is `index`
+    /// (positions in `tile.bin`, replaced here by set-up ids) into `out`.
     ///
     /// On x86-64 CPUs with AVX2 the pass is compiled a second time for 256-bit vectors and chosen
     /// at run time; Rust never fuses or reorders floating-point operations, so the results are
@@ -97,7 +101,7 @@ impl DeferredPass<'_> {
         block: &mut Block,
         row0: usize,
         tile: TileSetups<'_>,
-        index: &[u32],
+        index: &mut [u32],
         out: Rows<'_>,
     ) {
         #[cfg(target_arch = "x86_64")]
@@ -116,7 +120,7 @@ impl DeferredPass<'_> {
         block: &mut Block,
         row0: usize,
         tile: TileSetups<'_>,
-        index: &[u32],
+        index: &mut [u32],
         out: Rows<'_>,
     ) {
         self.shade_tile_inline(block, row0, tile, index, out);
@@ -128,7 +132,7 @@ impl DeferredPass<'_> {
         block: &mut Block,
         row0: usize,
         tile: TileSetups<'_>,
-        index: &[u32],
+        index: &mut [u32],
         out: Rows<'_>,
     ) {
         let w = self.intrinsics.width as usize;
@@ -136,7 +140,7 @@ impl DeferredPass<'_> {
         let mut t_rows = out.triangle.chunks_mut(w);
         let mut b_rows = out.bary.chunks_mut(w);
         for (r, ((setups, color), depth)) in index
-            .chunks(w)
+            .chunks_mut(w)
             .zip(out.color.chunks_mut(w))
             .zip(out.depth.chunks_mut(w))
             .enumerate()
@@ -159,7 +163,7 @@ impl DeferredPass<'_> {
         block: &mut Block,
         y: usize,
         tile: &TileSetups<'_>,
-        setups: &[u32],
+        setups: &mut [u32],
         row: Rows<'_>,
     ) {
         let Rows {
@@ -180,15 +184,15 @@ impl DeferredPass<'_> {
             let end = x + setups[x..].iter().take_while(|&&t| t == s).count();
             let found = (s != NO_TRIANGLE)
                 .then(|| {
-                    let (id, sp) = (tile.bin.get(s as usize)?, tile.planes.get(s as usize)?);
+                    let (&id, sp) = (tile.bin.get(s as usize)?, tile.planes.get(s as usize)?);
                     let st = tile
                         .chunks
                         .get((id >> 16) as usize)?
                         .get((id & 0xffff) as usize)?;
-                    Some((st, sp))
+                    Some((id, st, sp))
                 })
                 .flatten();
-            let Some((st, sp)) = found else {
+            let Some((id, st, sp)) = found else {
                 fill_color(&mut c_row[x..end], self.background);
                 d_row[x..end].fill(0.0);
                 if let Some(t) = t_row.get_mut(x..end) {
@@ -200,6 +204,8 @@ impl DeferredPass<'_> {
                 x = end;
                 continue;
             };
+            // The visibility buffer gets the set-up id in place of the position in the bin.
+            setups[x..end].fill(id);
             if let Some(t) = t_row.get_mut(x..end) {
                 t.fill(st.triangle());
             }
@@ -214,8 +220,11 @@ impl DeferredPass<'_> {
             // The set-up's planes along this row, in `u = x − x₀`.
             let v = (y as i64 - sp.origin[1] as i64) as f64;
             let inverse_depth = sp.inverse_depth.row(v);
-            let normal = sp.normal.map(|p| p.row(v));
-            let albedo = sp.albedo.map(|p| p.row(v));
+            // (Arrays written out: `[T; N]::map` was left out of line, without AVX2.)
+            let [n0, n1, n2] = &sp.normal;
+            let normal = [n0.row(v), n1.row(v), n2.row(v)];
+            let [a0, a1, a2] = &sp.albedo;
+            let albedo = [a0.row(v), a1.row(v), a2.row(v)];
             let u0 = x as i64 - sp.origin[0] as i64;
             let mut x0 = x;
             while x0 < end {
@@ -225,11 +234,13 @@ impl DeferredPass<'_> {
                 // The next (up to) GROUP pixels of the span; lanes past the span's end are
                 // computed and written to the block but not counted.
                 let n = (end - x0).min(GROUP);
-                let us: [f64; GROUP] =
-                    std::array::from_fn(|l| (u0 + (x0 - x) as i64 + l as i64) as f64);
-                let inv_d = us.map(|u| 1.0 / inverse_depth.at(u));
+                // Integers far below 2⁵³: one conversion, then exact additions.
+                let (u_first, x_first) = ((u0 + (x0 - x) as i64) as f64, x0 as f64);
+                let us: [f64; GROUP] = std::array::from_fn(|l| u_first + l as f64);
+                let inv_d: [f64; GROUP] = std::array::from_fn(|l| 1.0 / inverse_depth.at(us[l]));
                 let z: [f64; GROUP] = std::array::from_fn(|l| sp.edge_sum * inv_d[l]);
-                let xr: [f64; GROUP] = std::array::from_fn(|l| ((x0 + l) as f64 - k.cx) * inv_fx);
+                let xr: [f64; GROUP] =
+                    std::array::from_fn(|l| (x_first + l as f64 - k.cx) * inv_fx);
                 let value: [f32; GROUP] = std::array::from_fn(|l| {
                     (match self.kind {
                         DepthKind::Z => z[l],
@@ -293,7 +304,7 @@ impl DeferredPass<'_> {
         let m = block.len;
         let s = &mut block.surface;
         if let Albedo::Texture { texture, wrap } = self.albedo {
-            texture.sample_rgb_lanes(&block.texel, m, wrap, &mut s.albedo);
+            texture.sample_rgb_lanes(&block.texel, m, wrap, &mut block.taps, &mut s.albedo);
         }
         for k in 0..m {
             // The surface point is z · (x', y', 1) on this pixel's ray, so the unit view vector

@@ -85,19 +85,28 @@ impl SetupPlanes {
         normals: &[[f32; 3]],
         albedo: &Albedo<'_>,
     ) -> SetupPlanes {
-        let t = mesh.triangles[st.triangle() as usize].map(|i| i as usize);
+        let [t0, t1, t2] = mesh.triangles[st.triangle() as usize];
+        let t = [t0 as usize, t1 as usize, t2 as usize];
         let (q, edge_sum) = st.perspective_planes();
         // Corner `i` of the set-up is the point `Σ_j B_ij v_j` of the mesh triangle, so
         // `Σ_i a_i q_i = Σ_j A_j Σ_i B_ij q_i`: one plane per mesh vertex `j`, then one
         // combination per channel.
-        let bc = st.corner_bary().map(|b| b.map(f64::from));
-        let vertex: [Plane; 3] =
-            std::array::from_fn(|j| Plane::combine(&q, [bc[0][j], bc[1][j], bc[2][j]]));
+        let bc = st.corner_bary();
+        let vertex: [Plane; 3] = match corner_of_vertex(bc) {
+            Some([c0, c1, c2]) => [q[c0], q[c1], q[c2]],
+            None => std::array::from_fn(|j| {
+                Plane::combine(&q, [bc[0][j].into(), bc[1][j].into(), bc[2][j].into()])
+            }),
+        };
         // One channel's plane from its values at the mesh triangle's vertices.
         let channel = |a0: f64, a1: f64, a2: f64| Plane::combine(&vertex, [a0, a1, a2]);
         let albedo = match albedo {
             Albedo::Texture { texture, .. } => {
-                let [p0, p1, p2] = [t[0], t[1], t[2]].map(|i| texture.texel_coords(mesh.uvs[i]));
+                let [p0, p1, p2] = [
+                    texture.texel_coords(mesh.uvs[t[0]]),
+                    texture.texel_coords(mesh.uvs[t[1]]),
+                    texture.texel_coords(mesh.uvs[t[2]]),
+                ];
                 [
                     channel(p0[0], p1[0], p2[0]),
                     channel(p0[1], p1[1], p2[1]),
@@ -105,8 +114,8 @@ impl SetupPlanes {
                 ]
             }
             Albedo::VertexColors => {
-                let [c0, c1, c2] = [t[0], t[1], t[2]].map(|i| mesh.colors[i]);
-                [0, 1, 2].map(|c| channel(c0[c].into(), c1[c].into(), c2[c].into()))
+                let [c0, c1, c2] = [mesh.colors[t[0]], mesh.colors[t[1]], mesh.colors[t[2]]];
+                std::array::from_fn(|c| channel(c0[c].into(), c1[c].into(), c2[c].into()))
             }
             Albedo::Constant(_) => [Plane::default(); 3],
         };
@@ -124,4 +133,19 @@ impl SetupPlanes {
             albedo,
         }
     }
+}
+
+/// For a set-up whose corners are the mesh triangle's vertices (not clipped; perhaps reordered
+/// for orientation), the corner of each vertex: `corner[j] = i` where `bc[i] = e_j`.
+#[inline(always)]
+fn corner_of_vertex(bc: &[[f32; 3]; 3]) -> Option<[usize; 3]> {
+    let mut corner = [usize::MAX; 3];
+    for (i, row) in bc.iter().enumerate() {
+        let j = row.iter().position(|&b| b == 1.0)?;
+        if row.iter().filter(|&&b| b == 0.0).count() != 2 {
+            return None;
+        }
+        corner[j] = i;
+    }
+    corner.iter().all(|&i| i < 3).then_some(corner)
 }

@@ -141,7 +141,9 @@ impl Rasterizer {
     ) -> Result<(), RenderError> {
         self.set_up(positions, triangles, model, camera, cull)?;
         let n_tiles = self.bins.len();
-        self.scan_tiles((0..n_tiles).into_par_iter(), |_, _, _, _, _| {});
+        self.scan_tiles((0..n_tiles).into_par_iter(), |_, _, _, bin, index| {
+            positions_to_ids(bin, index)
+        });
         Ok(())
     }
 
@@ -230,11 +232,12 @@ impl Rasterizer {
     /// with the `t`-th of `per_tile` (one item per tile), the tile's first row, the ids of the
     /// set-ups that overlap the tile (in triangle order) and its rows of the visibility buffer
     /// — which at that point hold *positions in `bin`* ([`NO_TRIANGLE`] for background), so
-    /// that per-tile data can be kept in a dense array; they are replaced by set-up ids after.
+    /// that per-tile data can be kept in a dense array. `then` must replace them by the set-up
+    /// ids (`bin[k]`, see [`positions_to_ids`]).
     pub(crate) fn scan_tiles<T: Send>(
         &mut self,
         per_tile: impl IndexedParallelIterator<Item = T>,
-        then: impl Fn(T, usize, &[Vec<ScreenTriangle>], &[u32], &[u32]) + Sync,
+        then: impl Fn(T, usize, &[Vec<ScreenTriangle>], &[u32], &mut [u32]) + Sync,
     ) {
         let width = self.width as usize;
         let n_pixels = width * self.height as usize;
@@ -254,9 +257,6 @@ impl Rasterizer {
                     scan_tile(chunks, bin, row0 as i32, width, depth, index);
                 });
                 then(item, row0, chunks, bin, index);
-                for s in index.iter_mut().filter(|s| **s != NO_TRIANGLE) {
-                    *s = bin[*s as usize];
-                }
             });
     }
 
@@ -373,7 +373,8 @@ impl ScreenTriangle {
     /// of corner `i` is `q_i / Σq_i` ([`crate::interpolation`]).
     pub(crate) fn perspective_planes(&self) -> ([Plane; 3], f64) {
         let (x, y) = (self.x0 as f64, self.y0 as f64);
-        let e = self.edges.map(|e| e.plane_at(x, y));
+        let [e0, e1, e2] = &self.edges;
+        let e = [e0.plane_at(x, y), e1.plane_at(x, y), e2.plane_at(x, y)];
         let planes = std::array::from_fn(|i| Plane {
             c: e[i][0] * self.inv_w[i],
             dx: e[i][1] * self.inv_w[i],
@@ -388,6 +389,14 @@ thread_local! {
     /// not needed once a tile is scanned, and one tile-sized buffer per thread stays in cache
     /// where a whole-frame one would come from memory every frame.
     static TILE_DEPTH: RefCell<Vec<f32>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Replaces positions in `bin` by the set-up ids there ([`NO_TRIANGLE`] stays: bins are
+/// shorter).
+pub(crate) fn positions_to_ids(bin: &[u32], index: &mut [u32]) {
+    for s in index {
+        *s = bin.get(*s as usize).copied().unwrap_or(NO_TRIANGLE);
+    }
 }
 
 /// Scan-converts the set-ups `bin` (ids into `chunks`) into one tile of the visibility buffer:
@@ -611,7 +620,11 @@ fn setup_triangle(
     cull: CullMode,
     out: &mut Vec<ScreenTriangle>,
 ) {
-    let c = t.map(|i| clip[i as usize]);
+    let c = [
+        clip[t[0] as usize],
+        clip[t[1] as usize],
+        clip[t[2] as usize],
+    ];
     // Trivial rejection: all corners outside one frustum plane (valid in homogeneous space),
     // with one outcode bit per plane.
     let outcode = |v: [f64; 4]| -> u8 {
@@ -622,7 +635,8 @@ fn setup_triangle(
             | ((near_distance(v) < 0.0) as u8) << 4
             | ((far_distance(v) < 0.0) as u8) << 5
     };
-    if outcode(c[0]) & outcode(c[1]) & outcode(c[2]) != 0 {
+    let o = [outcode(c[0]), outcode(c[1]), outcode(c[2])];
+    if o[0] & o[1] & o[2] != 0 {
         return;
     }
     let corner = |k: usize| {
@@ -630,8 +644,35 @@ fn setup_triangle(
         bary[k] = 1.0;
         ClipVertex { clip: c[k], bary }
     };
-    let poly = clip_triangle([corner(0), corner(1), corner(2)]);
-    let vs = poly.vertices();
+    let corners = [corner(0), corner(1), corner(2)];
+    // Between the near and far planes (almost always) the triangle is its own clipped polygon.
+    const NEAR_FAR: u8 = 0b11_0000;
+    if (o[0] | o[1] | o[2]) & NEAR_FAR == 0 {
+        set_up_fan(&corners, id, width, height, cull, out);
+    } else {
+        set_up_fan(
+            clip_triangle(corners).vertices(),
+            id,
+            width,
+            height,
+            cull,
+            out,
+        );
+    }
+}
+
+/// Projects the convex polygon `vs` (clip space, inside the near and far planes) and sets up
+/// the triangles of its fan around `vs[0]`, for mesh triangle `id`; nothing for fewer than 3
+/// vertices.
+#[inline(always)]
+fn set_up_fan(
+    vs: &[ClipVertex],
+    id: u32,
+    width: u32,
+    height: u32,
+    cull: CullMode,
+    out: &mut Vec<ScreenTriangle>,
+) {
     if vs.len() < 3 {
         return;
     }

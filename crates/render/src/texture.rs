@@ -276,7 +276,7 @@ impl Texture {
     }
 
     /// [`Texture::sample_rgb`] of the first `m` texel-space positions `xy` (`[axis][lane]`, see
-    /// [`Texture::texel_coords`]) into `out` (`[channel][lane]`).
+    /// [`Texture::texel_coords`]) into `out` (`[channel][lane]`), with scratch `taps`.
     ///
     /// All taps are located before any texel is read (lane-parallel arithmetic for clamping),
     /// so that the texel loads of the lanes are independent and overlap: sampled one by one,
@@ -291,9 +291,9 @@ impl Texture {
         xy: &[[f64; LANES]; 2],
         m: usize,
         wrap: Wrap,
+        taps: &mut TapLanes,
         out: &mut [[f32; LANES]; 3],
     ) {
-        let mut taps = TapLanes::default();
         let m = m.min(LANES);
         // One loop per wrap mode, so that each is branch-free (plain loops: a closure here was
         // compiled out of line, without the caller's AVX2); the clamped one is lane-parallel.
@@ -304,14 +304,14 @@ impl Texture {
             {
                 #[allow(clippy::needless_range_loop)]
                 for k in 0..m {
-                    self.taps_at([xy[0][k], xy[1][k]], Wrap::Clamp, &mut taps, k);
+                    self.taps_at([xy[0][k], xy[1][k]], Wrap::Clamp, taps, k);
                 }
             }
             Wrap::Repeat =>
             {
                 #[allow(clippy::needless_range_loop)]
                 for k in 0..m {
-                    self.taps_at([xy[0][k], xy[1][k]], Wrap::Repeat, &mut taps, k);
+                    self.taps_at([xy[0][k], xy[1][k]], Wrap::Repeat, taps, k);
                 }
             }
         }
@@ -334,15 +334,15 @@ impl Texture {
             .zip(&mut b[..m])
             .enumerate()
         {
-            [*r, *g, *b] = self.blend(&taps, k);
+            [*r, *g, *b] = self.blend(taps, k);
         }
     }
 }
 
 /// Bilinear taps of [`LANES`] samples (structure of arrays): texel columns `i, i + 1` and rows
 /// `j, j + 1` after wrapping, the fractional position, and the 16-bit scale (0 for a
-/// non-finite position).
-struct TapLanes {
+/// non-finite position). Scratch of [`Texture::sample_rgb_lanes`].
+pub(crate) struct TapLanes {
     column: [[i32; LANES]; 2],
     row: [[i32; LANES]; 2],
     fx: [f32; LANES],
