@@ -686,7 +686,12 @@ fn set_up_fan(
         let (p1, p2) = (to_screen(&vs[i]), to_screen(&vs[i + 1]));
         let mut p = [first.0, p1.0, p2.0];
         let mut inv_w = [first.1, p1.1, p2.1];
-        let mut bary = [vs[0].bary, vs[i].bary, vs[i + 1].bary].map(|b| b.map(|x| x as f32));
+        let to_f32 = |b: [f64; 3]| [b[0] as f32, b[1] as f32, b[2] as f32];
+        let mut bary = [
+            to_f32(vs[0].bary),
+            to_f32(vs[i].bary),
+            to_f32(vs[i + 1].bary),
+        ];
         let area = signed_area2(&p);
         if !(area.is_finite() && area != 0.0) {
             continue;

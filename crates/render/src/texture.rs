@@ -244,34 +244,38 @@ impl Texture {
                 )
             }
         };
-        taps.column[0][k] = i0;
-        taps.column[1][k] = i1;
-        taps.row[0][k] = j0;
-        taps.row[1][k] = j1;
+        let w = w as u64;
+        taps.index[k] = j0 as u64 * w + i0 as u64;
+        taps.next_column[k] = (i1 - i0) as i64 as u64;
+        taps.next_row[k] = ((j1 - j0) as i64 * w as i64) as u64;
         // NaN positions: zero weights (and `NaN as i32 = 0`, a valid texel).
-        taps.fx[k] = if finite { fx } else { 0.0 };
-        taps.fy[k] = if finite { fy } else { 0.0 };
-        taps.scale[k] = if finite { 1.0 / TEXEL_MAX } else { 0.0 };
+        let (fx, fy) = if finite { (fx, fy) } else { (0.0, 0.0) };
+        let s = if finite { 1.0 / TEXEL_MAX } else { 0.0 };
+        taps.weight[0][k] = (1.0 - fx) * (1.0 - fy) * s;
+        taps.weight[1][k] = fx * (1.0 - fy) * s;
+        taps.weight[2][k] = (1.0 - fx) * fy * s;
+        taps.weight[3][k] = fx * fy * s;
     }
 
     /// The RGB sample of lane `k` of `taps`: the weighted sum of its four texels.
     #[inline(always)]
     fn blend(&self, taps: &TapLanes, k: usize) -> [f32; 3] {
-        let w = self.width as usize;
-        let (fx, fy, s) = (taps.fx[k], taps.fy[k], taps.scale[k]);
-        let (i0, i1) = (taps.column[0][k] as usize, taps.column[1][k] as usize);
-        let (r0, r1) = (taps.row[0][k] as usize * w, taps.row[1][k] as usize * w);
-        let index = [r0 + i0, r0 + i1, r1 + i0, r1 + i1];
+        let (i00, di, dj) = (taps.index[k], taps.next_column[k], taps.next_row[k]);
+        // Wrapping: a step back to column or row 0 of a repeated texture is "negative".
+        let (i10, i01) = (i00.wrapping_add(di), i00.wrapping_add(dj));
+        let i11 = i01.wrapping_add(di);
+        let texel = |i: u64| self.texels[i as usize];
+        let texels = [texel(i00), texel(i10), texel(i01), texel(i11)];
         let weight = [
-            (1.0 - fx) * (1.0 - fy) * s,
-            fx * (1.0 - fy) * s,
-            (1.0 - fx) * fy * s,
-            fx * fy * s,
+            taps.weight[0][k],
+            taps.weight[1][k],
+            taps.weight[2][k],
+            taps.weight[3][k],
         ];
         // Tap by tap over all four channels, although alpha is dropped: one SIMD register (one
         // widening conversion and multiply-add per tap). `0 + a` is exact, so the sum is
         // `w₀₀t₀₀ + w₁₀t₁₀ + w₀₁t₀₁ + w₁₁t₁₁` in this order, whichever way it is computed.
-        let rgba = weighted_sum(index.map(|i| self.texels[i]), weight);
+        let rgba = weighted_sum(texels, weight);
         [rgba[0], rgba[1], rgba[2]]
     }
 
@@ -281,11 +285,9 @@ impl Texture {
     /// All taps are located before any texel is read (lane-parallel arithmetic for clamping),
     /// so that the texel loads of the lanes are independent and overlap: sampled one by one,
     /// each sample's cache misses (a large texture does not fit in cache) stalled the work
-    /// behind it.
-    ///
-    /// # Panics
-    /// If `m > LANES`.
+    /// behind it. At most [`LANES`] positions are sampled.
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // `k` indexes several lane arrays
     pub(crate) fn sample_rgb_lanes(
         &self,
         xy: &[[f64; LANES]; 2],
@@ -300,29 +302,22 @@ impl Texture {
         // `k < m ≤ LANES` is visible to the compiler here, so the lane stores need no bounds
         // checks and the clamped loop vectorises.
         match wrap {
-            Wrap::Clamp =>
-            {
-                #[allow(clippy::needless_range_loop)]
+            Wrap::Clamp => {
                 for k in 0..m {
                     self.taps_at([xy[0][k], xy[1][k]], Wrap::Clamp, taps, k);
                 }
             }
-            Wrap::Repeat =>
-            {
-                #[allow(clippy::needless_range_loop)]
+            Wrap::Repeat => {
                 for k in 0..m {
                     self.taps_at([xy[0][k], xy[1][k]], Wrap::Repeat, taps, k);
                 }
             }
         }
         // Every lane's two texel rows start loading before the first is read.
-        let w = self.width as usize;
         for k in 0..m {
-            for row in &taps.row {
-                if let Some(texel) = self
-                    .texels
-                    .get(row[k] as usize * w + taps.column[0][k] as usize)
-                {
+            let first = taps.index[k] as usize;
+            for index in [first, first.wrapping_add(taps.next_row[k] as usize)] {
+                if let Some(texel) = self.texels.get(index) {
                     prefetch(texel);
                 }
             }
@@ -339,25 +334,25 @@ impl Texture {
     }
 }
 
-/// Bilinear taps of [`LANES`] samples (structure of arrays): texel columns `i, i + 1` and rows
-/// `j, j + 1` after wrapping, the fractional position, and the 16-bit scale (0 for a
+/// Bilinear taps of [`LANES`] samples (structure of arrays) after wrapping: the texel index of
+/// tap `(i, j)` and the steps to columns `i + 1` and rows `j + 1` (0 at a clamped border,
+/// negative — wrapped in `u64` — at a repeated one), and the weights of the taps `(i, j)`,
+/// `(i + 1, j)`, `(i, j + 1)`, `(i + 1, j + 1)` with the 16-bit scale folded in (all 0 for a
 /// non-finite position). Scratch of [`Texture::sample_rgb_lanes`].
 pub(crate) struct TapLanes {
-    column: [[i32; LANES]; 2],
-    row: [[i32; LANES]; 2],
-    fx: [f32; LANES],
-    fy: [f32; LANES],
-    scale: [f32; LANES],
+    index: [u64; LANES],
+    next_column: [u64; LANES],
+    next_row: [u64; LANES],
+    weight: [[f32; LANES]; 4],
 }
 
 impl Default for TapLanes {
     fn default() -> Self {
         TapLanes {
-            column: [[0; LANES]; 2],
-            row: [[0; LANES]; 2],
-            fx: [0.0; LANES],
-            fy: [0.0; LANES],
-            scale: [0.0; LANES],
+            index: [0; LANES],
+            next_column: [0; LANES],
+            next_row: [0; LANES],
+            weight: [[0.0; LANES]; 4],
         }
     }
 }
