@@ -149,3 +149,96 @@ fn corner_of_vertex(bc: &[[f32; 3]; 3]) -> Option<[usize; 3]> {
     }
     corner.iter().all(|&i| i < 3).then_some(corner)
 }
+
+#[cfg(test)]
+mod tests {
+    use rand::{Rng, SeedableRng};
+    use visage_camera::Intrinsics;
+
+    use super::*;
+    use crate::rasterize::{CullMode, Rasterizer};
+    use crate::{Camera, Mat4, Texture, Wrap};
+
+    /// The planes reproduce, at every covered pixel centre, the per-pixel reconstruction from
+    /// the edge functions (depth, and normal and texel position from the mesh barycentrics),
+    /// for set-ups that are whole triangles (in either orientation) and pieces of triangles
+    /// clipped by the near plane.
+    #[test]
+    fn planes_agree_with_the_per_pixel_reconstruction() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let mut mesh = TriMesh::default();
+        for t in 0..40u32 {
+            for _ in 0..3 {
+                // Every fourth triangle reaches behind the near plane (z < 1 mm).
+                let z: f64 = if t % 4 == 0 && rng.random_bool(0.4) {
+                    rng.random_range(-0.3..0.0005)
+                } else {
+                    rng.random_range(0.3..3.0)
+                };
+                let xy: [f64; 2] = std::array::from_fn(|_| rng.random_range(-0.6..0.6) * z.abs());
+                mesh.vertices.push([xy[0], xy[1], z]);
+                mesh.uvs
+                    .push([rng.random_range(-0.2..1.2), rng.random_range(-0.2..1.2)]);
+            }
+            mesh.triangles.push([3 * t, 3 * t + 1, 3 * t + 2]);
+        }
+        let normals: Vec<[f32; 3]> = (0..mesh.vertices.len())
+            .map(|_| std::array::from_fn(|_| rng.random_range(-1.0..1.0)))
+            .collect();
+        let texture = Texture::new(64, 32, vec![[0.5; 4]; 64 * 32]).unwrap();
+        let albedo = Albedo::Texture {
+            texture: &texture,
+            wrap: Wrap::Repeat,
+        };
+        let k = Intrinsics::new(160, 120, 90.0, 95.0, 80.3, 59.6).unwrap();
+        let mut raster = Rasterizer::new();
+        let camera = Camera::new(k).unwrap();
+        raster
+            .set_up(
+                &mesh.vertices,
+                &mesh.triangles,
+                &Mat4::IDENTITY,
+                &camera,
+                CullMode::None,
+            )
+            .unwrap();
+        let (mut pixels, mut clipped) = (0, 0);
+        for st in raster.screen_triangles() {
+            let planes = SetupPlanes::new(st, &mesh, &normals, &albedo);
+            let is_clipped = corner_of_vertex(st.corner_bary()).is_none();
+            clipped += usize::from(is_clipped);
+            // Clipped corners carry `f32` barycentrics, which the two computations combine in
+            // different orders (depth does not use them).
+            let tolerance = if is_clipped { 1e-6 } else { 1e-9 };
+            let close = |a: f64, b: f64, what: &str| {
+                assert!(
+                    (a - b).abs() <= tolerance * (1.0 + b.abs()),
+                    "{what}: {a} vs {b}"
+                );
+            };
+            let t = mesh.triangles[st.triangle() as usize].map(|i| i as usize);
+            st.for_each_pixel(|x, y| {
+                pixels += 1;
+                let (x, y) = (x as f64, y as f64);
+                let (w, z) = st.corner_weights(&st.rows(y), x);
+                let b = st.mesh_bary(&w);
+                let [u, v] = [x - planes.origin[0] as f64, y - planes.origin[1] as f64];
+                let d = planes.inverse_depth.row(v).at(u);
+                assert!((planes.edge_sum / d - z).abs() <= 1e-12 * z, "depth");
+                for (c, plane) in planes.normal.iter().enumerate() {
+                    let n: f64 = (0..3).map(|j| b[j] * normals[t[j]][c] as f64).sum();
+                    close(plane.row(v).at(u) / d, n, "normal");
+                }
+                let uv = std::array::from_fn(|c| (0..3).map(|j| b[j] * mesh.uvs[t[j]][c]).sum());
+                let texel = texture.texel_coords(uv);
+                for (c, texel) in texel.into_iter().enumerate() {
+                    close(planes.albedo[c].row(v).at(u) / d, texel, "texel position");
+                }
+            });
+        }
+        assert!(
+            pixels > 2000 && clipped > 0,
+            "{pixels} pixels, {clipped} clipped set-ups"
+        );
+    }
+}
