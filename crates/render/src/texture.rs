@@ -183,7 +183,7 @@ impl Texture {
         ]
     }
 
-    /// The bilinear taps of [`Texture::sample_rgb`] at a texel-space position (see
+    /// The bilinear taps of [`Texture::sample`] (RGB only) at a texel-space position (see
     /// [`Texture::texel_coords`]) into lane `k` of `taps`; no texel is read. Non-finite
     /// positions give zero weights.
     #[inline(always)]
@@ -279,8 +279,9 @@ impl Texture {
         [rgba[0], rgba[1], rgba[2]]
     }
 
-    /// [`Texture::sample_rgb`] of the first `m` texel-space positions `xy` (`[axis][lane]`, see
-    /// [`Texture::texel_coords`]) into `out` (`[channel][lane]`), with scratch `taps`.
+    /// The RGB part of [`Texture::sample`] at the first `m` texel-space positions `xy`
+    /// (`[axis][lane]`, see [`Texture::texel_coords`]) into `out` (`[channel][lane]`), with
+    /// scratch `taps`.
     ///
     /// All taps are located before any texel is read (lane-parallel arithmetic for clamping),
     /// so that the texel loads of the lanes are independent and overlap: sampled one by one,
