@@ -302,6 +302,9 @@ impl DeferredPass<'_> {
     #[inline(always)]
     fn flush(&self, block: &mut Block, yr: f32, yr2_plus_1: f32, c_row: &mut [[f32; 3]]) {
         let m = block.len;
+        if m == 0 {
+            return;
+        }
         let s = &mut block.surface;
         if let Albedo::Texture { texture, wrap } = self.albedo {
             texture.sample_rgb_lanes(&block.texel, m, wrap, &mut block.taps, &mut s.albedo);
@@ -327,8 +330,21 @@ impl DeferredPass<'_> {
             }
         }
         self.shader.shade_lanes(s, m);
-        for (k, &x) in block.column[..m].iter().enumerate() {
-            c_row[x as usize] = [s.albedo[0][k], s.albedo[1][k], s.albedo[2][k]];
+        let [r, g, b] = &s.albedo;
+        let first = block.column[0] as usize;
+        match c_row.get_mut(first..first + m) {
+            // Contiguous columns (no background in between, the usual case): one interleaving
+            // copy, which vectorises.
+            Some(out) if block.column[m - 1] as usize == first + m - 1 => {
+                for (k, out) in out.iter_mut().enumerate() {
+                    *out = [r[k], g[k], b[k]];
+                }
+            }
+            _ => {
+                for (k, &x) in block.column[..m].iter().enumerate() {
+                    c_row[x as usize] = [r[k], g[k], b[k]];
+                }
+            }
         }
         block.len = 0;
     }
