@@ -90,13 +90,19 @@ impl SetupPlanes {
         let (q, edge_sum) = st.perspective_planes();
         // Corner `i` of the set-up is the point `Σ_j B_ij v_j` of the mesh triangle, so
         // `Σ_i a_i q_i = Σ_j A_j Σ_i B_ij q_i`: one plane per mesh vertex `j`, then one
-        // combination per channel.
-        let bc = st.corner_bary();
-        let vertex: [Plane; 3] = match corner_of_vertex(bc) {
-            Some([c0, c1, c2]) => [q[c0], q[c1], q[c2]],
-            None => std::array::from_fn(|j| {
-                Plane::combine(&q, [bc[0][j].into(), bc[1][j].into(), bc[2][j].into()])
-            }),
+        // combination per channel. Unclipped set-ups (almost all) have the vertices as corners,
+        // in order or with the last two swapped for orientation, decided at set-up: constant
+        // indices keep the planes in registers.
+        let vertex: [Plane; 3] = match st.vertex_corners() {
+            Some([0, 1, 2]) => q,
+            Some([0, 2, 1]) => [q[0], q[2], q[1]],
+            Some(c) => c.map(|i| q[i as usize]),
+            None => {
+                let bc = st.corner_bary();
+                std::array::from_fn(|j| {
+                    Plane::combine(&q, [bc[0][j].into(), bc[1][j].into(), bc[2][j].into()])
+                })
+            }
         };
         // One channel's plane from its values at the mesh triangle's vertices.
         let channel = |a0: f64, a1: f64, a2: f64| Plane::combine(&vertex, [a0, a1, a2]);
@@ -133,19 +139,4 @@ impl SetupPlanes {
             albedo,
         }
     }
-}
-
-/// For a set-up whose corners are the mesh triangle's vertices (not clipped; perhaps reordered
-/// for orientation), the corner of each vertex: `corner[j] = i` where `bc[i] = e_j`.
-#[inline(always)]
-fn corner_of_vertex(bc: &[[f32; 3]; 3]) -> Option<[usize; 3]> {
-    let mut corner = [usize::MAX; 3];
-    for (i, row) in bc.iter().enumerate() {
-        let j = row.iter().position(|&b| b == 1.0)?;
-        if row.iter().filter(|&&b| b == 0.0).count() != 2 {
-            return None;
-        }
-        corner[j] = i;
-    }
-    corner.iter().all(|&i| i < 3).then_some(corner)
 }

@@ -65,6 +65,9 @@ pub struct ScreenTriangle {
     /// Barycentric coordinates of the corners in the original mesh triangle (`f32`: they only
     /// weight attributes; depth comes from `inv_w` in `f64`).
     bary: [[f32; 3]; 3],
+    /// When the corners are the mesh triangle's vertices (`bary` a permutation of the identity,
+    /// as for every unclipped set-up): for each vertex `j`, its corner `i` (`bary[i] = e_j`).
+    vertex_corners: Option<[u8; 3]>,
     /// Inclusive pixel bounding box, already clamped to the image.
     x0: i32,
     x1: i32,
@@ -359,6 +362,13 @@ impl ScreenTriangle {
         &self.bary
     }
 
+    /// For a set-up whose corners are the mesh triangle's vertices, the corner of each vertex
+    /// (`corner_bary()[corner[j]] = e_j`); `None` when clipping made new corners.
+    #[inline(always)]
+    pub(crate) fn vertex_corners(&self) -> Option<[u8; 3]> {
+        self.vertex_corners
+    }
+
     /// The top-left pixel `(x₀, y₀)` of the bounding box: the origin of
     /// [`ScreenTriangle::perspective_planes`].
     pub(crate) fn origin(&self) -> [i32; 2] {
@@ -371,6 +381,7 @@ impl ScreenTriangle {
     /// `E_i` is proportional to the screen-space barycentric `λ_i` and `1/w` is affine in
     /// screen space, so each `q_i` is: `1/z = Σq_i / ΣE_i` and the perspective-correct weight
     /// of corner `i` is `q_i / Σq_i` ([`crate::interpolation`]).
+    #[inline(always)]
     pub(crate) fn perspective_planes(&self) -> ([Plane; 3], f64) {
         let (x, y) = (self.x0 as f64, self.y0 as f64);
         let [e0, e1, e2] = &self.edges;
@@ -648,10 +659,11 @@ fn setup_triangle(
     // Between the near and far planes (almost always) the triangle is its own clipped polygon.
     const NEAR_FAR: u8 = 0b11_0000;
     if (o[0] | o[1] | o[2]) & NEAR_FAR == 0 {
-        set_up_fan(&corners, id, width, height, cull, out);
+        set_up_fan(&corners, true, id, width, height, cull, out);
     } else {
         set_up_fan(
             clip_triangle(corners).vertices(),
+            false,
             id,
             width,
             height,
@@ -663,10 +675,11 @@ fn setup_triangle(
 
 /// Projects the convex polygon `vs` (clip space, inside the near and far planes) and sets up
 /// the triangles of its fan around `vs[0]`, for mesh triangle `id`; nothing for fewer than 3
-/// vertices.
+/// vertices. `unclipped`: `vs` are the mesh triangle's three vertices in order.
 #[inline(always)]
 fn set_up_fan(
     vs: &[ClipVertex],
+    unclipped: bool,
     id: u32,
     width: u32,
     height: u32,
@@ -707,6 +720,12 @@ fn set_up_fan(
             inv_w.swap(1, 2);
             bary.swap(1, 2);
         }
+        let vertex_corners = match (unclipped, area < 0.0) {
+            (true, false) => Some([0, 1, 2]),
+            (true, true) => Some([0, 2, 1]),
+            // A crossing point can round to a vertex's barycentrics in `f32`.
+            (false, _) => corner_of_vertex(&bary),
+        };
         let xmin = p[0][0].min(p[1][0]).min(p[2][0]);
         let xmax = p[0][0].max(p[1][0]).max(p[2][0]);
         let ymin = p[0][1].min(p[1][1]).min(p[2][1]);
@@ -726,6 +745,7 @@ fn set_up_fan(
             ],
             inv_w,
             bary,
+            vertex_corners,
             x0: x0 as i32,
             x1: x1 as i32,
             y0: y0 as i32,
@@ -734,6 +754,20 @@ fn set_up_fan(
             front_facing,
         });
     }
+}
+
+/// For corners with barycentrics `bc` in the mesh triangle, the corner of each vertex
+/// (`corner[j] = i` where `bc[i] = e_j`), or `None` unless the corners are the vertices.
+fn corner_of_vertex(bc: &[[f32; 3]; 3]) -> Option<[u8; 3]> {
+    let mut corner = [u8::MAX; 3];
+    for (i, row) in bc.iter().enumerate() {
+        let j = row.iter().position(|&b| b == 1.0)?;
+        if row.iter().filter(|&&b| b == 0.0).count() != 2 {
+            return None;
+        }
+        corner[j] = i as u8;
+    }
+    corner.iter().all(|&i| i < 3).then_some(corner)
 }
 
 #[cfg(test)]
