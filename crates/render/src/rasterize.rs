@@ -104,6 +104,9 @@ pub struct Rasterizer {
     camera_positions: Vec<[f64; 3]>,
     vertices: Vec<ProjectedVertex>,
     setup_chunks: Vec<Vec<ScreenTriangle>>,
+    /// Per set-up chunk and tile, the ids of the chunk's set-ups that overlap the tile.
+    chunk_bins: Vec<Vec<Vec<u32>>>,
+    /// Per tile, the ids of the set-ups that overlap it, in triangle order.
     bins: Vec<Vec<u32>>,
     index: Vec<u32>,
 }
@@ -202,32 +205,42 @@ impl Rasterizer {
             });
         }
         let n_chunks = triangles.len().div_ceil(chunk_len);
+        let n_tiles = (height as usize).div_ceil(TILE_ROWS);
         self.setup_chunks.resize_with(n_chunks, Vec::new);
+        self.chunk_bins.resize_with(n_chunks, Vec::new);
         let vertices = &self.vertices;
         triangles
             .par_chunks(chunk_len)
             .zip(self.setup_chunks.par_iter_mut())
+            .zip(self.chunk_bins.par_iter_mut())
             .enumerate()
-            .for_each(|(c, (chunk, out))| {
+            .for_each(|(c, ((chunk, out), bins))| {
                 out.clear();
+                bins.resize_with(n_tiles, Vec::new);
+                bins.iter_mut().for_each(Vec::clear);
                 for (i, t) in chunk.iter().enumerate() {
                     let id = (c * chunk_len + i) as u32;
                     setup_triangle(vertices, *t, id, width, height, cull, out);
                 }
-            });
-
-        // Binning into row tiles.
-        let n_tiles = (height as usize).div_ceil(TILE_ROWS);
-        self.bins.resize_with(n_tiles, Vec::new);
-        self.bins.iter_mut().for_each(Vec::clear);
-        for (c, chunk) in self.setup_chunks.iter().enumerate() {
-            for (i, st) in chunk.iter().enumerate() {
-                let id = (c << 16 | i) as u32;
-                for tile in st.y0 as usize / TILE_ROWS..=st.y1 as usize / TILE_ROWS {
-                    self.bins[tile].push(id);
+                // Binning into row tiles, while the chunk's set-ups are in cache.
+                for (k, st) in out.iter().enumerate() {
+                    let id = (c << 16 | k) as u32;
+                    let tiles = st.y0 as usize / TILE_ROWS..=st.y1 as usize / TILE_ROWS;
+                    bins[tiles].iter_mut().for_each(|bin| bin.push(id));
                 }
-            }
-        }
+            });
+        // Each tile's bin: those of the chunks, in chunk (so triangle) order.
+        let chunk_bins = &self.chunk_bins;
+        self.bins.resize_with(n_tiles, Vec::new);
+        self.bins
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(tile, bin)| {
+                bin.clear();
+                for bins in chunk_bins {
+                    bin.extend_from_slice(&bins[tile]);
+                }
+            });
         Ok(())
     }
 
