@@ -179,12 +179,7 @@ impl Renderer {
             }
             _ => {}
         }
-        if !model.is_finite_affine() {
-            return Err(RenderError::Transform {
-                what: "model matrix",
-                reason: format!("not a finite affine matrix: {model:?}"),
-            });
-        }
+        crate::validate::check_model(model)?;
         let model_view: Mat3 = camera.pose.matrix().mul(model).linear();
         let nm = normal_matrix(&model_view)?;
 

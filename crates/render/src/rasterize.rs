@@ -146,6 +146,23 @@ impl Rasterizer {
         camera: &Camera,
         cull: CullMode,
     ) -> Result<(), RenderError> {
+        camera.validate()?;
+        crate::validate::check_model(model)?;
+        crate::validate::check_positions(positions)?;
+        crate::validate::check_triangles(triangles, positions.len())?;
+        self.rasterize_valid(positions, triangles, model, camera, cull)
+    }
+
+    /// [`Rasterizer::rasterize`] of geometry validated by the caller (finite positions, vertex
+    /// indices in range), which is not checked again.
+    pub(crate) fn rasterize_valid(
+        &mut self,
+        positions: &[[f64; 3]],
+        triangles: &[[u32; 3]],
+        model: &Mat4,
+        camera: &Camera,
+        cull: CullMode,
+    ) -> Result<(), RenderError> {
         self.set_up(positions, triangles, model, camera, cull)?;
         let n_tiles = self.bins.len();
         self.scan_tiles((0..n_tiles).into_par_iter(), |_, _, _, bin, index| {
@@ -156,6 +173,10 @@ impl Rasterizer {
 
     /// The first half of [`Rasterizer::rasterize`]: vertex transforms, triangle set-ups and
     /// binning into tiles ([`Rasterizer::setup_chunks`] is ready afterwards).
+    ///
+    /// # Panics
+    /// If a vertex index is out of range: the callers validate the geometry (positions finite,
+    /// indices in range) once per frame, before anything else is computed.
     pub(crate) fn set_up(
         &mut self,
         positions: &[[f64; 3]],
@@ -165,14 +186,7 @@ impl Rasterizer {
         cull: CullMode,
     ) -> Result<(), RenderError> {
         camera.validate()?;
-        if !model.is_finite_affine() {
-            return Err(RenderError::Transform {
-                what: "model matrix",
-                reason: format!("not a finite affine matrix: {model:?}"),
-            });
-        }
-        crate::validate::check_positions(positions)?;
-        crate::validate::check_triangles(triangles, positions.len())?;
+        crate::validate::check_model(model)?;
 
         let k = &camera.intrinsics;
         let (width, height) = (k.width, k.height);
