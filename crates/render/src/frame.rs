@@ -6,7 +6,7 @@ use visage_mesh::TriMesh;
 
 use crate::camera::Camera;
 use crate::deferred::{Block, DeferredPass, Rows, TileSetups};
-use crate::interpolation::SetupPlanes;
+use crate::interpolation::{SetupPlanes, VertexChannels};
 use crate::mat4::{Mat3, Mat4};
 use crate::normals::{normal_matrix, transform_normal, vertex_normals_into};
 use crate::rasterize::{CullMode, Rasterizer, NO_TRIANGLE, TILE_ROWS};
@@ -110,7 +110,8 @@ impl Frame {
 pub struct Renderer {
     rasterizer: Rasterizer,
     object_normals: Vec<[f64; 3]>,
-    camera_normals: Vec<[f32; 3]>,
+    /// Per vertex, the channels interpolated across set-ups (camera-space normal, albedo source).
+    channels: VertexChannels,
     /// Per tile, the interpolation planes of its set-ups (in bin order).
     planes: Vec<Vec<SetupPlanes>>,
 }
@@ -193,14 +194,13 @@ impl Renderer {
         } else {
             &mesh.normals
         };
-        self.camera_normals.resize(object_normals.len(), [0.0; 3]);
-        object_normals
-            .par_iter()
-            .zip(self.camera_normals.par_iter_mut())
-            .with_min_len(4096)
-            .for_each(|(n, out)| *out = transform_normal(&nm, *n).map(|x| x as f32));
+        self.channels.fill(
+            mesh,
+            |v| transform_normal(&nm, object_normals[v]).map(|x| x as f32),
+            &scene.albedo,
+        );
 
-        let normals = &self.camera_normals;
+        let channels = &self.channels;
         // Steps 7–10: one reconstruction and shading evaluation per visible pixel, each tile
         // right after its scan, while its visibility buffer and set-ups are still in cache.
         let pass = DeferredPass {
@@ -249,7 +249,7 @@ impl Renderer {
                 planes.clear();
                 planes.extend(bin.iter().map(|&s| {
                     let st = &chunks[(s >> 16) as usize][(s & 0xffff) as usize];
-                    SetupPlanes::new(st, mesh, normals, &scene.albedo)
+                    SetupPlanes::new(st, &mesh.triangles, channels)
                 }));
                 let tile = TileSetups {
                     chunks,

@@ -8,6 +8,7 @@
 //! function. So each set-up gets one [`Plane`] per attribute channel, and a pixel costs one
 //! division (`1/D`, shared by every channel) and a multiply-add and a multiply per channel.
 
+use rayon::prelude::*;
 use visage_mesh::TriMesh;
 
 use crate::frame::Albedo;
@@ -59,6 +60,61 @@ impl RowLine {
     }
 }
 
+/// Channels interpolated across a set-up: the camera-space normal (three), then the albedo
+/// source's (see [`VertexChannels`]).
+pub(crate) const CHANNELS: usize = 6;
+
+/// Per mesh vertex, the values of the channels a set-up interpolates: the camera-space normal
+/// (Eq. (6.2), rounded to `f32`), then the albedo source's — texel-space position
+/// ([`crate::Texture::texel_coords`]) for a textured albedo, linear RGB for vertex colours.
+/// Gathered once per vertex and frame rather than at every set-up of the vertex's triangles.
+#[derive(Debug, Default)]
+pub(crate) struct VertexChannels {
+    values: Vec<[f64; CHANNELS]>,
+    /// How many albedo channels are used: 2, 3, or 0 for a constant albedo.
+    albedo_channels: usize,
+}
+
+impl VertexChannels {
+    /// Fills the table for the vertices of `mesh` with camera-space normals `normal(v)` and the
+    /// albedo source `albedo` (whose attribute the mesh must have). In parallel over vertices.
+    pub(crate) fn fill(
+        &mut self,
+        mesh: &TriMesh,
+        normal: impl Fn(usize) -> [f32; 3] + Sync,
+        albedo: &Albedo<'_>,
+    ) {
+        let source = |v: usize| -> [f64; 3] {
+            match albedo {
+                Albedo::Texture { texture, .. } => {
+                    let [x, y] = texture.texel_coords(mesh.uvs[v]);
+                    [x, y, 0.0]
+                }
+                Albedo::VertexColors => {
+                    let [r, g, b] = mesh.colors[v];
+                    [r.into(), g.into(), b.into()]
+                }
+                Albedo::Constant(_) => [0.0; 3],
+            }
+        };
+        self.albedo_channels = match albedo {
+            Albedo::Texture { .. } => 2,
+            Albedo::VertexColors => 3,
+            Albedo::Constant(_) => 0,
+        };
+        self.values.resize(mesh.vertices.len(), [0.0; CHANNELS]);
+        self.values
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(4096)
+            .for_each(|(v, out)| {
+                let [nx, ny, nz] = normal(v);
+                let [a, b, c] = source(v);
+                *out = [nx.into(), ny.into(), nz.into(), a, b, c];
+            });
+    }
+}
+
 /// Everything a visible pixel of one set-up needs, as planes: depth, normal and albedo source.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct SetupPlanes {
@@ -76,17 +132,21 @@ pub(crate) struct SetupPlanes {
 }
 
 impl SetupPlanes {
-    /// The planes of set-up `st` of `mesh`, with camera-space vertex normals `normals`. Indices
-    /// must be valid (meshes are validated before rasterisation).
+    /// The planes of set-up `st` of a mesh with triangles `triangles` and per-vertex channels
+    /// `channels`. Indices must be valid (meshes are validated before rasterisation).
     #[inline(always)]
     pub(crate) fn new(
         st: &ScreenTriangle,
-        mesh: &TriMesh,
-        normals: &[[f32; 3]],
-        albedo: &Albedo<'_>,
+        triangles: &[[u32; 3]],
+        channels: &VertexChannels,
     ) -> SetupPlanes {
-        let [t0, t1, t2] = mesh.triangles[st.triangle() as usize];
-        let t = [t0 as usize, t1 as usize, t2 as usize];
+        let [t0, t1, t2] = triangles[st.triangle() as usize];
+        let values = &channels.values;
+        let [a0, a1, a2] = [
+            &values[t0 as usize],
+            &values[t1 as usize],
+            &values[t2 as usize],
+        ];
         let (q, edge_sum) = st.perspective_planes();
         // Corner `i` of the set-up is the point `Σ_j B_ij v_j` of the mesh triangle, so
         // `Σ_i a_i q_i = Σ_j A_j Σ_i B_ij q_i`: one plane per mesh vertex `j`, then one
@@ -105,38 +165,20 @@ impl SetupPlanes {
             }
         };
         // One channel's plane from its values at the mesh triangle's vertices.
-        let channel = |a0: f64, a1: f64, a2: f64| Plane::combine(&vertex, [a0, a1, a2]);
-        let albedo = match albedo {
-            Albedo::Texture { texture, .. } => {
-                let [p0, p1, p2] = [
-                    texture.texel_coords(mesh.uvs[t[0]]),
-                    texture.texel_coords(mesh.uvs[t[1]]),
-                    texture.texel_coords(mesh.uvs[t[2]]),
-                ];
-                [
-                    channel(p0[0], p1[0], p2[0]),
-                    channel(p0[1], p1[1], p2[1]),
-                    Plane::default(),
-                ]
+        let channel = |c: usize| Plane::combine(&vertex, [a0[c], a1[c], a2[c]]);
+        let albedo = |c: usize| {
+            if c < channels.albedo_channels {
+                channel(3 + c)
+            } else {
+                Plane::default()
             }
-            Albedo::VertexColors => {
-                let [c0, c1, c2] = [mesh.colors[t[0]], mesh.colors[t[1]], mesh.colors[t[2]]];
-                std::array::from_fn(|c| channel(c0[c].into(), c1[c].into(), c2[c].into()))
-            }
-            Albedo::Constant(_) => [Plane::default(); 3],
         };
-        let [n0, n1, n2] = [normals[t[0]], normals[t[1]], normals[t[2]]];
-        let normal = [
-            channel(n0[0].into(), n1[0].into(), n2[0].into()),
-            channel(n0[1].into(), n1[1].into(), n2[1].into()),
-            channel(n0[2].into(), n1[2].into(), n2[2].into()),
-        ];
         SetupPlanes {
             origin: st.origin(),
             edge_sum,
             inverse_depth: Plane::combine(&q, [1.0; 3]),
-            normal,
-            albedo,
+            normal: [channel(0), channel(1), channel(2)],
+            albedo: [albedo(0), albedo(1), albedo(2)],
         }
     }
 }
