@@ -246,11 +246,7 @@ impl Renderer {
                 // Step 7's interpolation planes of the tile's set-ups, computed here so that
                 // they are in cache for its pixels (a set-up overlapping two tiles is done
                 // twice; all of them up front were mostly out of cache by their turn).
-                planes.clear();
-                planes.extend(bin.iter().map(|&s| {
-                    let st = &chunks[(s >> 16) as usize][(s & 0xffff) as usize];
-                    SetupPlanes::new(st, &mesh.triangles, channels)
-                }));
+                SetupPlanes::of_bin(planes, bin, chunks, &mesh.triangles, channels);
                 let tile = TileSetups {
                     chunks,
                     bin,

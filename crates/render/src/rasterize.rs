@@ -422,6 +422,27 @@ impl ScreenTriangle {
         });
         (planes, e[0][0] + e[1][0] + e[2][0])
     }
+
+    /// [`ScreenTriangle::perspective_planes`] with each plane in the lanes `(c, dx, dy, 0)` of
+    /// one AVX register: the same operations.
+    #[cfg(target_arch = "x86_64")]
+    #[inline]
+    #[target_feature(enable = "avx")]
+    pub(crate) fn perspective_planes_x4(&self) -> ([std::arch::x86_64::__m256d; 3], f64) {
+        use std::arch::x86_64::*;
+        let (x, y) = (self.x0 as f64, self.y0 as f64);
+        let [e0, e1, e2] = &self.edges;
+        let e = [e0.plane_at(x, y), e1.plane_at(x, y), e2.plane_at(x, y)];
+        let plane = |[c, dx, dy]: [f64; 3], inv_w: f64| {
+            _mm256_mul_pd(_mm256_setr_pd(c, dx, dy, 0.0), _mm256_set1_pd(inv_w))
+        };
+        let planes = [
+            plane(e[0], self.inv_w[0]),
+            plane(e[1], self.inv_w[1]),
+            plane(e[2], self.inv_w[2]),
+        ];
+        (planes, e[0][0] + e[1][0] + e[2][0])
+    }
 }
 
 thread_local! {
