@@ -1,5 +1,8 @@
 //! The colour renderer: Algorithm 3 end to end, producing every buffer of a frame.
 
+use std::cell::RefCell;
+
+use rayon::iter::Either;
 use rayon::prelude::*;
 use visage_camera::{DepthKind, DepthMap};
 use visage_mesh::TriMesh;
@@ -213,24 +216,13 @@ impl Renderer {
         };
         let tile_len = TILE_ROWS * k.width as usize;
         let n_tiles = (k.height as usize).div_ceil(TILE_ROWS);
-        // Tiles of the optional buffers, or empty tiles when a buffer is not wanted.
-        let tri_tiles: Vec<&mut [u32]> = if frame.triangle_id.is_empty() {
-            (0..n_tiles).map(|_| &mut [][..]).collect()
-        } else {
-            frame.triangle_id.chunks_mut(tile_len).collect()
-        };
-        let bary_tiles: Vec<&mut [[f32; 3]]> = if frame.barycentrics.is_empty() {
-            (0..n_tiles).map(|_| &mut [][..]).collect()
-        } else {
-            frame.barycentrics.chunks_mut(tile_len).collect()
-        };
         self.planes.resize_with(n_tiles, Vec::new);
         let tiles = frame
             .color
             .par_chunks_mut(tile_len)
             .zip(frame.depth.data.par_chunks_mut(tile_len))
-            .zip(tri_tiles)
-            .zip(bary_tiles)
+            .zip(optional_tiles(&mut frame.triangle_id, tile_len, n_tiles))
+            .zip(optional_tiles(&mut frame.barycentrics, tile_len, n_tiles))
             .zip(self.planes.par_iter_mut())
             .map(|((((color, depth), triangle), bary), planes)| {
                 let rows = Rows {
@@ -252,8 +244,28 @@ impl Renderer {
                     bin,
                     planes,
                 };
-                pass.shade_tile(&mut Block::default(), row0, tile, index, out)
+                BLOCK.with_borrow_mut(|block| pass.shade_tile(block, row0, tile, index, out))
             });
         Ok(())
+    }
+}
+
+thread_local! {
+    /// Each worker thread's shading scratch, kept across tiles and frames (a fresh one per tile
+    /// zeroed its 7 KiB for nothing: lanes are written before they are read).
+    static BLOCK: RefCell<Block> = RefCell::new(Block::default());
+}
+
+/// The tiles (`tile_len` elements each) of an optional frame buffer, or `n_tiles` empty tiles
+/// when the buffer is not wanted (empty).
+fn optional_tiles<T: Send>(
+    buffer: &mut [T],
+    tile_len: usize,
+    n_tiles: usize,
+) -> impl IndexedParallelIterator<Item = &mut [T]> {
+    if buffer.is_empty() {
+        Either::Right((0..n_tiles).into_par_iter().map(|_| &mut [][..]))
+    } else {
+        Either::Left(buffer.par_chunks_mut(tile_len))
     }
 }
