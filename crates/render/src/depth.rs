@@ -65,7 +65,7 @@ pub fn render_depth_with(
     cull: CullMode,
 ) -> Result<DepthRender, RenderError> {
     crate::validate::check_mesh(mesh)?;
-    rasterizer.rasterize(&mesh.vertices, &mesh.triangles, model, camera, cull)?;
+    rasterizer.rasterize_valid(&mesh.vertices, &mesh.triangles, model, camera, cull)?;
     let k = camera.intrinsics;
     let (w, h) = (k.width as usize, k.height as usize);
     let mut depth = DepthMap::empty(k.width, k.height, kind);

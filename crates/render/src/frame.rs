@@ -1,12 +1,15 @@
 //! The colour renderer: Algorithm 3 end to end, producing every buffer of a frame.
 
+use std::cell::RefCell;
+
+use rayon::iter::Either;
 use rayon::prelude::*;
 use visage_camera::{DepthKind, DepthMap};
 use visage_mesh::TriMesh;
 
 use crate::camera::Camera;
 use crate::deferred::{Block, DeferredPass, Rows, TileSetups};
-use crate::interpolation::SetupPlanes;
+use crate::interpolation::{SetupPlanes, VertexChannels};
 use crate::mat4::{Mat3, Mat4};
 use crate::normals::{normal_matrix, transform_normal, vertex_normals_into};
 use crate::rasterize::{CullMode, Rasterizer, NO_TRIANGLE, TILE_ROWS};
@@ -110,7 +113,8 @@ impl Frame {
 pub struct Renderer {
     rasterizer: Rasterizer,
     object_normals: Vec<[f64; 3]>,
-    camera_normals: Vec<[f32; 3]>,
+    /// Per vertex, the channels interpolated across set-ups (camera-space normal, albedo source).
+    channels: VertexChannels,
     /// Per tile, the interpolation planes of its set-ups (in bin order).
     planes: Vec<Vec<SetupPlanes>>,
 }
@@ -179,12 +183,7 @@ impl Renderer {
             }
             _ => {}
         }
-        if !model.is_finite_affine() {
-            return Err(RenderError::Transform {
-                what: "model matrix",
-                reason: format!("not a finite affine matrix: {model:?}"),
-            });
-        }
+        crate::validate::check_model(model)?;
         let model_view: Mat3 = camera.pose.matrix().mul(model).linear();
         let nm = normal_matrix(&model_view)?;
 
@@ -198,14 +197,13 @@ impl Renderer {
         } else {
             &mesh.normals
         };
-        self.camera_normals.resize(object_normals.len(), [0.0; 3]);
-        object_normals
-            .par_iter()
-            .zip(self.camera_normals.par_iter_mut())
-            .with_min_len(4096)
-            .for_each(|(n, out)| *out = transform_normal(&nm, *n).map(|x| x as f32));
+        self.channels.fill(
+            mesh,
+            |v| transform_normal(&nm, object_normals[v]).map(|x| x as f32),
+            &scene.albedo,
+        );
 
-        let normals = &self.camera_normals;
+        let channels = &self.channels;
         // Steps 7–10: one reconstruction and shading evaluation per visible pixel, each tile
         // right after its scan, while its visibility buffer and set-ups are still in cache.
         let pass = DeferredPass {
@@ -218,24 +216,13 @@ impl Renderer {
         };
         let tile_len = TILE_ROWS * k.width as usize;
         let n_tiles = (k.height as usize).div_ceil(TILE_ROWS);
-        // Tiles of the optional buffers, or empty tiles when a buffer is not wanted.
-        let tri_tiles: Vec<&mut [u32]> = if frame.triangle_id.is_empty() {
-            (0..n_tiles).map(|_| &mut [][..]).collect()
-        } else {
-            frame.triangle_id.chunks_mut(tile_len).collect()
-        };
-        let bary_tiles: Vec<&mut [[f32; 3]]> = if frame.barycentrics.is_empty() {
-            (0..n_tiles).map(|_| &mut [][..]).collect()
-        } else {
-            frame.barycentrics.chunks_mut(tile_len).collect()
-        };
         self.planes.resize_with(n_tiles, Vec::new);
         let tiles = frame
             .color
             .par_chunks_mut(tile_len)
             .zip(frame.depth.data.par_chunks_mut(tile_len))
-            .zip(tri_tiles)
-            .zip(bary_tiles)
+            .zip(optional_tiles(&mut frame.triangle_id, tile_len, n_tiles))
+            .zip(optional_tiles(&mut frame.barycentrics, tile_len, n_tiles))
             .zip(self.planes.par_iter_mut())
             .map(|((((color, depth), triangle), bary), planes)| {
                 let rows = Rows {
@@ -251,18 +238,34 @@ impl Renderer {
                 // Step 7's interpolation planes of the tile's set-ups, computed here so that
                 // they are in cache for its pixels (a set-up overlapping two tiles is done
                 // twice; all of them up front were mostly out of cache by their turn).
-                planes.clear();
-                planes.extend(bin.iter().map(|&s| {
-                    let st = &chunks[(s >> 16) as usize][(s & 0xffff) as usize];
-                    SetupPlanes::new(st, mesh, normals, &scene.albedo)
-                }));
+                SetupPlanes::of_bin(planes, bin, chunks, &mesh.triangles, channels);
                 let tile = TileSetups {
                     chunks,
                     bin,
                     planes,
                 };
-                pass.shade_tile(&mut Block::default(), row0, tile, index, out)
+                BLOCK.with_borrow_mut(|block| pass.shade_tile(block, row0, tile, index, out))
             });
         Ok(())
+    }
+}
+
+thread_local! {
+    /// Each worker thread's shading scratch, kept across tiles and frames (a fresh one per tile
+    /// zeroed its 7 KiB for nothing: lanes are written before they are read).
+    static BLOCK: RefCell<Block> = RefCell::new(Block::default());
+}
+
+/// The tiles (`tile_len` elements each) of an optional frame buffer, or `n_tiles` empty tiles
+/// when the buffer is not wanted (empty).
+fn optional_tiles<T: Send>(
+    buffer: &mut [T],
+    tile_len: usize,
+    n_tiles: usize,
+) -> impl IndexedParallelIterator<Item = &mut [T]> {
+    if buffer.is_empty() {
+        Either::Right((0..n_tiles).into_par_iter().map(|_| &mut [][..]))
+    } else {
+        Either::Left(buffer.par_chunks_mut(tile_len))
     }
 }

@@ -8,6 +8,7 @@
 //! function. So each set-up gets one [`Plane`] per attribute channel, and a pixel costs one
 //! division (`1/D`, shared by every channel) and a multiply-add and a multiply per channel.
 
+use rayon::prelude::*;
 use visage_mesh::TriMesh;
 
 use crate::frame::Albedo;
@@ -59,6 +60,61 @@ impl RowLine {
     }
 }
 
+/// Channels interpolated across a set-up: the camera-space normal (three), then the albedo
+/// source's (see [`VertexChannels`]).
+pub(crate) const CHANNELS: usize = 6;
+
+/// Per mesh vertex, the values of the channels a set-up interpolates: the camera-space normal
+/// (Eq. (6.2), rounded to `f32`), then the albedo source's — texel-space position
+/// ([`crate::Texture::texel_coords`]) for a textured albedo, linear RGB for vertex colours.
+/// Gathered once per vertex and frame rather than at every set-up of the vertex's triangles.
+#[derive(Debug, Default)]
+pub(crate) struct VertexChannels {
+    values: Vec<[f64; CHANNELS]>,
+    /// How many albedo channels are used: 2, 3, or 0 for a constant albedo.
+    albedo_channels: usize,
+}
+
+impl VertexChannels {
+    /// Fills the table for the vertices of `mesh` with camera-space normals `normal(v)` and the
+    /// albedo source `albedo` (whose attribute the mesh must have). In parallel over vertices.
+    pub(crate) fn fill(
+        &mut self,
+        mesh: &TriMesh,
+        normal: impl Fn(usize) -> [f32; 3] + Sync,
+        albedo: &Albedo<'_>,
+    ) {
+        let source = |v: usize| -> [f64; 3] {
+            match albedo {
+                Albedo::Texture { texture, .. } => {
+                    let [x, y] = texture.texel_coords(mesh.uvs[v]);
+                    [x, y, 0.0]
+                }
+                Albedo::VertexColors => {
+                    let [r, g, b] = mesh.colors[v];
+                    [r.into(), g.into(), b.into()]
+                }
+                Albedo::Constant(_) => [0.0; 3],
+            }
+        };
+        self.albedo_channels = match albedo {
+            Albedo::Texture { .. } => 2,
+            Albedo::VertexColors => 3,
+            Albedo::Constant(_) => 0,
+        };
+        self.values.resize(mesh.vertices.len(), [0.0; CHANNELS]);
+        self.values
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(4096)
+            .for_each(|(v, out)| {
+                let [nx, ny, nz] = normal(v);
+                let [a, b, c] = source(v);
+                *out = [nx.into(), ny.into(), nz.into(), a, b, c];
+            });
+    }
+}
+
 /// Everything a visible pixel of one set-up needs, as planes: depth, normal and albedo source.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct SetupPlanes {
@@ -76,78 +132,172 @@ pub(crate) struct SetupPlanes {
 }
 
 impl SetupPlanes {
-    /// The planes of set-up `st` of `mesh`, with camera-space vertex normals `normals`. Indices
-    /// must be valid (meshes are validated before rasterisation).
+    /// The planes of the set-ups `bin` (ids `chunk << 16 | index` into `chunks`) into `planes`
+    /// (cleared first), in bin order: [`SetupPlanes::new`] of each.
+    ///
+    /// On x86-64 CPUs with AVX2 each plane is computed in the lanes of one 256-bit register
+    /// ([`SetupPlanes::new_avx2`]), chosen at run time; the planes are identical.
+    pub(crate) fn of_bin(
+        planes: &mut Vec<SetupPlanes>,
+        bin: &[u32],
+        chunks: &[Vec<ScreenTriangle>],
+        triangles: &[[u32; 3]],
+        channels: &VertexChannels,
+    ) {
+        planes.clear();
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            unsafe { Self::of_bin_avx2(planes, bin, chunks, triangles, channels) };
+            return;
+        }
+        planes.extend(bin.iter().map(|&s| {
+            let st = &chunks[(s >> 16) as usize][(s & 0xffff) as usize];
+            SetupPlanes::new(st, triangles, channels)
+        }));
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn of_bin_avx2(
+        planes: &mut Vec<SetupPlanes>,
+        bin: &[u32],
+        chunks: &[Vec<ScreenTriangle>],
+        triangles: &[[u32; 3]],
+        channels: &VertexChannels,
+    ) {
+        planes.reserve(bin.len());
+        for &s in bin {
+            let st = &chunks[(s >> 16) as usize][(s & 0xffff) as usize];
+            planes.push(SetupPlanes::new_avx2(st, triangles, channels));
+        }
+    }
+
+    /// The planes of set-up `st` of a mesh with triangles `triangles` and per-vertex channels
+    /// `channels`. Indices must be valid (meshes are validated before rasterisation).
     #[inline(always)]
     pub(crate) fn new(
         st: &ScreenTriangle,
-        mesh: &TriMesh,
-        normals: &[[f32; 3]],
-        albedo: &Albedo<'_>,
+        triangles: &[[u32; 3]],
+        channels: &VertexChannels,
     ) -> SetupPlanes {
-        let [t0, t1, t2] = mesh.triangles[st.triangle() as usize];
-        let t = [t0 as usize, t1 as usize, t2 as usize];
+        let [t0, t1, t2] = triangles[st.triangle() as usize];
+        let values = &channels.values;
+        let [a0, a1, a2] = [
+            &values[t0 as usize],
+            &values[t1 as usize],
+            &values[t2 as usize],
+        ];
         let (q, edge_sum) = st.perspective_planes();
         // Corner `i` of the set-up is the point `Σ_j B_ij v_j` of the mesh triangle, so
         // `Σ_i a_i q_i = Σ_j A_j Σ_i B_ij q_i`: one plane per mesh vertex `j`, then one
-        // combination per channel.
-        let bc = st.corner_bary();
-        let vertex: [Plane; 3] = match corner_of_vertex(bc) {
-            Some([c0, c1, c2]) => [q[c0], q[c1], q[c2]],
-            None => std::array::from_fn(|j| {
-                Plane::combine(&q, [bc[0][j].into(), bc[1][j].into(), bc[2][j].into()])
-            }),
+        // combination per channel. Unclipped set-ups (almost all) have the vertices as corners,
+        // in order or with the last two swapped for orientation, decided at set-up: constant
+        // indices keep the planes in registers.
+        let vertex: [Plane; 3] = match st.vertex_corners() {
+            Some([0, 1, 2]) => q,
+            Some([0, 2, 1]) => [q[0], q[2], q[1]],
+            Some(c) => c.map(|i| q[i as usize]),
+            None => {
+                let bc = st.corner_bary();
+                std::array::from_fn(|j| {
+                    Plane::combine(&q, [bc[0][j].into(), bc[1][j].into(), bc[2][j].into()])
+                })
+            }
         };
         // One channel's plane from its values at the mesh triangle's vertices.
-        let channel = |a0: f64, a1: f64, a2: f64| Plane::combine(&vertex, [a0, a1, a2]);
-        let albedo = match albedo {
-            Albedo::Texture { texture, .. } => {
-                let [p0, p1, p2] = [
-                    texture.texel_coords(mesh.uvs[t[0]]),
-                    texture.texel_coords(mesh.uvs[t[1]]),
-                    texture.texel_coords(mesh.uvs[t[2]]),
-                ];
-                [
-                    channel(p0[0], p1[0], p2[0]),
-                    channel(p0[1], p1[1], p2[1]),
-                    Plane::default(),
-                ]
+        let channel = |c: usize| Plane::combine(&vertex, [a0[c], a1[c], a2[c]]);
+        let albedo = |c: usize| {
+            if c < channels.albedo_channels {
+                channel(3 + c)
+            } else {
+                Plane::default()
             }
-            Albedo::VertexColors => {
-                let [c0, c1, c2] = [mesh.colors[t[0]], mesh.colors[t[1]], mesh.colors[t[2]]];
-                std::array::from_fn(|c| channel(c0[c].into(), c1[c].into(), c2[c].into()))
-            }
-            Albedo::Constant(_) => [Plane::default(); 3],
         };
-        let [n0, n1, n2] = [normals[t[0]], normals[t[1]], normals[t[2]]];
-        let normal = [
-            channel(n0[0].into(), n1[0].into(), n2[0].into()),
-            channel(n0[1].into(), n1[1].into(), n2[1].into()),
-            channel(n0[2].into(), n1[2].into(), n2[2].into()),
-        ];
         SetupPlanes {
             origin: st.origin(),
             edge_sum,
             inverse_depth: Plane::combine(&q, [1.0; 3]),
-            normal,
-            albedo,
+            normal: [channel(0), channel(1), channel(2)],
+            albedo: [albedo(0), albedo(1), albedo(2)],
+        }
+    }
+
+    /// [`SetupPlanes::new`] with each plane in the lanes `(c, dx, dy, 0)` of one AVX register:
+    /// lane by lane the same operations in the same order, so the same planes.
+    #[cfg(target_arch = "x86_64")]
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn new_avx2(
+        st: &ScreenTriangle,
+        triangles: &[[u32; 3]],
+        channels: &VertexChannels,
+    ) -> SetupPlanes {
+        use std::arch::x86_64::__m256d;
+        let [t0, t1, t2] = triangles[st.triangle() as usize];
+        let values = &channels.values;
+        let [a0, a1, a2] = [
+            &values[t0 as usize],
+            &values[t1 as usize],
+            &values[t2 as usize],
+        ];
+        let (q, edge_sum) = st.perspective_planes_x4();
+        let vertex: [__m256d; 3] = match st.vertex_corners() {
+            Some([0, 1, 2]) => q,
+            Some([0, 2, 1]) => [q[0], q[2], q[1]],
+            Some([c0, c1, c2]) => [q[c0 as usize], q[c1 as usize], q[c2 as usize]],
+            None => {
+                let bc = st.corner_bary();
+                std::array::from_fn(|j| {
+                    combine_x4(&q, [bc[0][j].into(), bc[1][j].into(), bc[2][j].into()])
+                })
+            }
+        };
+        let channel = |c: usize| plane_of_x4(combine_x4(&vertex, [a0[c], a1[c], a2[c]]));
+        let albedo = |c: usize| {
+            if c < channels.albedo_channels {
+                channel(3 + c)
+            } else {
+                Plane::default()
+            }
+        };
+        SetupPlanes {
+            origin: st.origin(),
+            edge_sum,
+            inverse_depth: plane_of_x4(combine_x4(&q, [1.0; 3])),
+            normal: [channel(0), channel(1), channel(2)],
+            albedo: [albedo(0), albedo(1), albedo(2)],
         }
     }
 }
 
-/// For a set-up whose corners are the mesh triangle's vertices (not clipped; perhaps reordered
-/// for orientation), the corner of each vertex: `corner[j] = i` where `bc[i] = e_j`.
-#[inline(always)]
-fn corner_of_vertex(bc: &[[f32; 3]; 3]) -> Option<[usize; 3]> {
-    let mut corner = [usize::MAX; 3];
-    for (i, row) in bc.iter().enumerate() {
-        let j = row.iter().position(|&b| b == 1.0)?;
-        if row.iter().filter(|&&b| b == 0.0).count() != 2 {
-            return None;
-        }
-        corner[j] = i;
+/// [`Plane::combine`] on planes in the lanes `(c, dx, dy, 0)`.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx")]
+fn combine_x4(planes: &[std::arch::x86_64::__m256d; 3], a: [f64; 3]) -> std::arch::x86_64::__m256d {
+    use std::arch::x86_64::*;
+    let [p, q, r] = planes;
+    let term = |a: f64, p: __m256d| _mm256_mul_pd(_mm256_set1_pd(a), p);
+    _mm256_add_pd(
+        _mm256_add_pd(term(a[0], *p), term(a[1], *q)),
+        term(a[2], *r),
+    )
+}
+
+/// The [`Plane`] in the lanes `(c, dx, dy, ·)`.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx")]
+fn plane_of_x4(lanes: std::arch::x86_64::__m256d) -> Plane {
+    let mut l = [0.0; 4];
+    // SAFETY: `l` holds four `f64`, what an unaligned 256-bit store writes.
+    unsafe { std::arch::x86_64::_mm256_storeu_pd(l.as_mut_ptr(), lanes) };
+    Plane {
+        c: l[0],
+        dx: l[1],
+        dy: l[2],
     }
-    corner.iter().all(|&i| i < 3).then_some(corner)
 }
 
 #[cfg(test)]
@@ -156,8 +306,82 @@ mod tests {
     use visage_camera::Intrinsics;
 
     use super::*;
-    use crate::rasterize::{CullMode, Rasterizer};
-    use crate::{Camera, Mat4, Texture, Wrap};
+    use crate::{Camera, CullMode, Mat4, Rasterizer, Texture, Wrap};
+
+    /// Every coefficient of `p`, as bits.
+    fn bits(p: &SetupPlanes) -> Vec<u64> {
+        let planes = std::iter::once(&p.inverse_depth)
+            .chain(&p.normal)
+            .chain(&p.albedo);
+        let coefficients = planes.flat_map(|q| [q.c, q.dx, q.dy]);
+        std::iter::once(p.edge_sum)
+            .chain(coefficients)
+            .map(f64::to_bits)
+            .chain([p.origin[0] as u64, p.origin[1] as u64])
+            .collect()
+    }
+
+    #[test]
+    fn avx2_planes_match_the_scalar_planes_bit_for_bit() {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+            // Small and large triangles of both orientations, some crossing the near plane.
+            let mut mesh = TriMesh::default();
+            for k in 0..2000u32 {
+                let size = if k % 50 == 0 { 0.5 } else { 0.05 };
+                let centre = [
+                    rng.random_range(-0.6..0.6),
+                    rng.random_range(-0.4..0.4),
+                    rng.random_range(0.15..2.0),
+                ];
+                for _ in 0..3 {
+                    mesh.vertices.push(std::array::from_fn(|c| {
+                        centre[c] + size * rng.random_range(-1.0..1.0)
+                    }));
+                    mesh.uvs.push([rng.random(), rng.random()]);
+                    mesh.colors.push([rng.random(), rng.random(), rng.random()]);
+                }
+                mesh.triangles.push([3 * k, 3 * k + 1, 3 * k + 2]);
+            }
+            let k = Intrinsics::new(320, 240, 300.0, 300.0, 160.0, 120.0).unwrap();
+            let camera = Camera::new(k).unwrap().with_clip_planes(0.2, 10.0).unwrap();
+            let mut r = Rasterizer::new();
+            r.set_up(
+                &mesh.vertices,
+                &mesh.triangles,
+                &Mat4::IDENTITY,
+                &camera,
+                CullMode::None,
+            )
+            .unwrap();
+            let setups: Vec<&ScreenTriangle> = r.screen_triangles().collect();
+            assert!(setups.len() > 1000, "{} set-ups", setups.len());
+            assert!(
+                setups.iter().any(|st| st.vertex_corners().is_none()),
+                "clipped"
+            );
+            let texture = Texture::new(8, 4, vec![[0.5; 4]; 32]).unwrap();
+            let normal = |v: usize| [v as f32 * 0.001, 0.5, -1.0 / (1.0 + v as f32)];
+            for albedo in [
+                Albedo::Texture {
+                    texture: &texture,
+                    wrap: Wrap::Clamp,
+                },
+                Albedo::VertexColors,
+                Albedo::Constant([0.5; 3]),
+            ] {
+                let mut channels = VertexChannels::default();
+                channels.fill(&mesh, normal, &albedo);
+                for st in &setups {
+                    let scalar = SetupPlanes::new(st, &mesh.triangles, &channels);
+                    // SAFETY: the CPU supports AVX2 (checked above).
+                    let avx2 = unsafe { SetupPlanes::new_avx2(st, &mesh.triangles, &channels) };
+                    assert_eq!(bits(&scalar), bits(&avx2));
+                }
+            }
+        }
+    }
 
     /// The planes reproduce, at every covered pixel centre, the per-pixel reconstruction from
     /// the edge functions (depth, and normal and texel position from the mesh barycentrics),
@@ -191,6 +415,8 @@ mod tests {
             wrap: Wrap::Repeat,
         };
         let k = Intrinsics::new(160, 120, 90.0, 95.0, 80.3, 59.6).unwrap();
+        let mut channels = VertexChannels::default();
+        channels.fill(&mesh, |v| normals[v], &albedo);
         let mut raster = Rasterizer::new();
         let camera = Camera::new(k).unwrap();
         raster
@@ -204,8 +430,8 @@ mod tests {
             .unwrap();
         let (mut pixels, mut clipped) = (0, 0);
         for st in raster.screen_triangles() {
-            let planes = SetupPlanes::new(st, &mesh, &normals, &albedo);
-            let is_clipped = corner_of_vertex(st.corner_bary()).is_none();
+            let planes = SetupPlanes::new(st, &mesh.triangles, &channels);
+            let is_clipped = st.vertex_corners().is_none();
             clipped += usize::from(is_clipped);
             // Clipped corners carry `f32` barycentrics, which the two computations combine in
             // different orders (depth does not use them).

@@ -1,5 +1,7 @@
 //! Vertex normals and their transformation: Eq. (6.2).
 
+use rayon::prelude::*;
+
 use crate::mat4::{cross, normalize, sub, Mat3};
 use crate::RenderError;
 
@@ -38,23 +40,42 @@ pub fn vertex_normals(vertices: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64
 
 /// [`vertex_normals`] into a caller-owned buffer (resized to #V; no allocation once it has
 /// grown), for per-frame use.
+///
+/// Parallel over ranges of vertices (rayon): each range scans the triangles in order and adds
+/// the face normals of those that touch it, so every vertex's sum runs over its triangles in
+/// triangle order, as in a serial scatter — the result does not depend on the split.
 pub fn vertex_normals_into(vertices: &[[f64; 3]], triangles: &[[u32; 3]], acc: &mut Vec<[f64; 3]>) {
     acc.clear();
     acc.resize(vertices.len(), [0.0; 3]);
-    for t in triangles {
-        let [a, b, c] = t.map(|i| vertices[i as usize]);
-        let n = cross(sub(b, a), sub(c, a));
-        for &i in t {
-            let s = &mut acc[i as usize];
-            s[0] += n[0];
-            s[1] += n[1];
-            s[2] += n[2];
-        }
-    }
-    for n in acc.iter_mut() {
-        *n = normalize(*n);
-    }
+    // One range per thread (every range reads all triangles), none below the minimum.
+    let range_len = MIN_VERTEX_RANGE.max(vertices.len().div_ceil(rayon::current_num_threads()));
+    acc.par_chunks_mut(range_len)
+        .enumerate()
+        .for_each(|(r, sums)| {
+            let (first, len) = (r * range_len, sums.len());
+            // The position in `sums` of vertex `i`, if in the range.
+            let local = |i: u32| Some((i as usize).wrapping_sub(first)).filter(|&k| k < len);
+            for t in triangles {
+                if t.iter().all(|&i| local(i).is_none()) {
+                    continue;
+                }
+                let [a, b, c] = t.map(|i| vertices[i as usize]);
+                let n = cross(sub(b, a), sub(c, a));
+                for k in t.iter().filter_map(|&i| local(i)) {
+                    let s = &mut sums[k];
+                    s[0] += n[0];
+                    s[1] += n[1];
+                    s[2] += n[2];
+                }
+            }
+            for n in sums.iter_mut() {
+                *n = normalize(*n);
+            }
+        });
 }
+
+/// Fewest vertices per parallel range of [`vertex_normals_into`].
+const MIN_VERTEX_RANGE: usize = 4096;
 
 #[cfg(test)]
 mod tests {
@@ -78,6 +99,46 @@ mod tests {
         let naive = normalize(a.mul_vec(n));
         assert!(dot(naive, normalize(a.mul_vec(t1))).abs() > 1e-2);
         assert!(normal_matrix(&Mat3::diagonal([1.0, 0.0, 1.0])).is_err());
+    }
+
+    #[test]
+    fn vertex_normals_do_not_depend_on_the_thread_count() {
+        // A bumpy grid of several vertex ranges, its triangles in a scrambled order so that
+        // every range meets triangles all along the list.
+        let n = 120u32;
+        let v: Vec<[f64; 3]> = (0..n * n)
+            .map(|k| {
+                let (i, j) = ((k % n) as f64, (k / n) as f64);
+                [i, j, (0.3 * i).sin() * (0.2 * j).cos()]
+            })
+            .collect();
+        let mut t = Vec::new();
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let a = j * n + i;
+                t.extend([[a, a + 1, a + n + 1], [a, a + n + 1, a + n]]);
+            }
+        }
+        let m = t.len();
+        let t: Vec<[u32; 3]> = (0..m).map(|k| t[k * 7919 % m]).collect();
+        let in_pool = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| vertex_normals(&v, &t))
+        };
+        let serial = in_pool(1);
+        for threads in [2, 3, 8] {
+            let parallel = in_pool(threads);
+            for (a, b) in serial.iter().zip(&parallel) {
+                assert_eq!(
+                    a.map(f64::to_bits),
+                    b.map(f64::to_bits),
+                    "{threads} threads"
+                );
+            }
+        }
     }
 
     #[test]

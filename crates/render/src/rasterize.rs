@@ -1,9 +1,10 @@
 //! Tile-parallel scan conversion with a z-buffer: steps 1–2, 5–7 and 10 of Algorithm 3.
 //!
 //! Pipeline per frame:
-//! 1. every vertex goes to camera space (`[R t]·M`) and clip space (`P·F`, Eq. (6.1));
+//! 1. every vertex goes to camera space (`[R t]·M`) and clip space (`P·F`, Eq. (6.1)), gets its
+//!    frustum outcode, and is divided by `w` and mapped by the viewport;
 //! 2. every triangle is trivially rejected against the frustum or clipped against the near/far
-//!    planes ([`crate::clip`]), divided by `w`, mapped by the viewport, and set up as a
+//!    planes ([`crate::clip`]; new corners are divided and mapped then), and set up as a
 //!    [`ScreenTriangle`] (edge functions, `1/w` at the corners, bounding box);
 //! 3. the set-ups are binned into horizontal tiles of [`TILE_ROWS`] image rows; tiles are
 //!    rasterised in parallel (rayon), each owning its slice of the visibility buffer and
@@ -65,6 +66,9 @@ pub struct ScreenTriangle {
     /// Barycentric coordinates of the corners in the original mesh triangle (`f32`: they only
     /// weight attributes; depth comes from `inv_w` in `f64`).
     bary: [[f32; 3]; 3],
+    /// When the corners are the mesh triangle's vertices (`bary` a permutation of the identity,
+    /// as for every unclipped set-up): for each vertex `j`, its corner `i` (`bary[i] = e_j`).
+    vertex_corners: Option<[u8; 3]>,
     /// Inclusive pixel bounding box, already clamped to the image.
     x0: i32,
     x1: i32,
@@ -98,8 +102,11 @@ pub struct Rasterizer {
     width: u32,
     height: u32,
     camera_positions: Vec<[f64; 3]>,
-    clip: Vec<[f64; 4]>,
+    vertices: Vec<ProjectedVertex>,
     setup_chunks: Vec<Vec<ScreenTriangle>>,
+    /// Per set-up chunk and tile, the ids of the chunk's set-ups that overlap the tile.
+    chunk_bins: Vec<Vec<Vec<u32>>>,
+    /// Per tile, the ids of the set-ups that overlap it, in triangle order.
     bins: Vec<Vec<u32>>,
     index: Vec<u32>,
 }
@@ -139,6 +146,23 @@ impl Rasterizer {
         camera: &Camera,
         cull: CullMode,
     ) -> Result<(), RenderError> {
+        camera.validate()?;
+        crate::validate::check_model(model)?;
+        crate::validate::check_positions(positions)?;
+        crate::validate::check_triangles(triangles, positions.len())?;
+        self.rasterize_valid(positions, triangles, model, camera, cull)
+    }
+
+    /// [`Rasterizer::rasterize`] of geometry validated by the caller (finite positions, vertex
+    /// indices in range), which is not checked again.
+    pub(crate) fn rasterize_valid(
+        &mut self,
+        positions: &[[f64; 3]],
+        triangles: &[[u32; 3]],
+        model: &Mat4,
+        camera: &Camera,
+        cull: CullMode,
+    ) -> Result<(), RenderError> {
         self.set_up(positions, triangles, model, camera, cull)?;
         let n_tiles = self.bins.len();
         self.scan_tiles((0..n_tiles).into_par_iter(), |_, _, _, bin, index| {
@@ -149,6 +173,10 @@ impl Rasterizer {
 
     /// The first half of [`Rasterizer::rasterize`]: vertex transforms, triangle set-ups and
     /// binning into tiles ([`Rasterizer::setup_chunks`] is ready afterwards).
+    ///
+    /// # Panics
+    /// If a vertex index is out of range: the callers validate the geometry (positions finite,
+    /// indices in range) once per frame, before anything else is computed.
     pub(crate) fn set_up(
         &mut self,
         positions: &[[f64; 3]],
@@ -158,14 +186,7 @@ impl Rasterizer {
         cull: CullMode,
     ) -> Result<(), RenderError> {
         camera.validate()?;
-        if !model.is_finite_affine() {
-            return Err(RenderError::Transform {
-                what: "model matrix",
-                reason: format!("not a finite affine matrix: {model:?}"),
-            });
-        }
-        crate::validate::check_positions(positions)?;
-        crate::validate::check_triangles(triangles, positions.len())?;
+        crate::validate::check_model(model)?;
 
         let k = &camera.intrinsics;
         let (width, height) = (k.width, k.height);
@@ -176,15 +197,16 @@ impl Rasterizer {
         let model_view = camera.pose.matrix().mul(model);
         let to_clip = camera.camera_to_clip();
         self.camera_positions.resize(positions.len(), [0.0; 3]);
-        self.clip.resize(positions.len(), [0.0; 4]);
+        self.vertices
+            .resize(positions.len(), ProjectedVertex::default());
         positions
             .par_iter()
             .zip(self.camera_positions.par_iter_mut())
-            .zip(self.clip.par_iter_mut())
+            .zip(self.vertices.par_iter_mut())
             .with_min_len(4096)
-            .for_each(|((p, cam), clip)| {
+            .for_each(|((p, cam), v)| {
                 *cam = model_view.transform_point(*p);
-                *clip = to_clip.transform_point4(*cam);
+                *v = ProjectedVertex::new(to_clip.transform_point4(*cam), width, height);
             });
 
         // Triangle set-up, in parallel over chunks; chunk order keeps triangle order.
@@ -197,32 +219,42 @@ impl Rasterizer {
             });
         }
         let n_chunks = triangles.len().div_ceil(chunk_len);
+        let n_tiles = (height as usize).div_ceil(TILE_ROWS);
         self.setup_chunks.resize_with(n_chunks, Vec::new);
-        let clip = &self.clip;
+        self.chunk_bins.resize_with(n_chunks, Vec::new);
+        let vertices = &self.vertices;
         triangles
             .par_chunks(chunk_len)
             .zip(self.setup_chunks.par_iter_mut())
+            .zip(self.chunk_bins.par_iter_mut())
             .enumerate()
-            .for_each(|(c, (chunk, out))| {
+            .for_each(|(c, ((chunk, out), bins))| {
                 out.clear();
+                bins.resize_with(n_tiles, Vec::new);
+                bins.iter_mut().for_each(Vec::clear);
                 for (i, t) in chunk.iter().enumerate() {
                     let id = (c * chunk_len + i) as u32;
-                    setup_triangle(clip, *t, id, width, height, cull, out);
+                    setup_triangle(vertices, *t, id, width, height, cull, out);
+                }
+                // Binning into row tiles, while the chunk's set-ups are in cache.
+                for (k, st) in out.iter().enumerate() {
+                    let id = (c << 16 | k) as u32;
+                    let tiles = st.y0 as usize / TILE_ROWS..=st.y1 as usize / TILE_ROWS;
+                    bins[tiles].iter_mut().for_each(|bin| bin.push(id));
                 }
             });
-
-        // Binning into row tiles.
-        let n_tiles = (height as usize).div_ceil(TILE_ROWS);
+        // Each tile's bin: those of the chunks, in chunk (so triangle) order.
+        let chunk_bins = &self.chunk_bins;
         self.bins.resize_with(n_tiles, Vec::new);
-        self.bins.iter_mut().for_each(Vec::clear);
-        for (c, chunk) in self.setup_chunks.iter().enumerate() {
-            for (i, st) in chunk.iter().enumerate() {
-                let id = (c << 16 | i) as u32;
-                for tile in st.y0 as usize / TILE_ROWS..=st.y1 as usize / TILE_ROWS {
-                    self.bins[tile].push(id);
+        self.bins
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(tile, bin)| {
+                bin.clear();
+                for bins in chunk_bins {
+                    bin.extend_from_slice(&bins[tile]);
                 }
-            }
-        }
+            });
         Ok(())
     }
 
@@ -361,6 +393,13 @@ impl ScreenTriangle {
         &self.bary
     }
 
+    /// For a set-up whose corners are the mesh triangle's vertices, the corner of each vertex
+    /// (`corner_bary()[corner[j]] = e_j`); `None` when clipping made new corners.
+    #[inline(always)]
+    pub(crate) fn vertex_corners(&self) -> Option<[u8; 3]> {
+        self.vertex_corners
+    }
+
     /// The top-left pixel `(x₀, y₀)` of the bounding box: the origin of
     /// [`ScreenTriangle::perspective_planes`].
     pub(crate) fn origin(&self) -> [i32; 2] {
@@ -373,6 +412,7 @@ impl ScreenTriangle {
     /// `E_i` is proportional to the screen-space barycentric `λ_i` and `1/w` is affine in
     /// screen space, so each `q_i` is: `1/z = Σq_i / ΣE_i` and the perspective-correct weight
     /// of corner `i` is `q_i / Σq_i` ([`crate::interpolation`]).
+    #[inline(always)]
     pub(crate) fn perspective_planes(&self) -> ([Plane; 3], f64) {
         let (x, y) = (self.x0 as f64, self.y0 as f64);
         let [e0, e1, e2] = &self.edges;
@@ -382,6 +422,27 @@ impl ScreenTriangle {
             dx: e[i][1] * self.inv_w[i],
             dy: e[i][2] * self.inv_w[i],
         });
+        (planes, e[0][0] + e[1][0] + e[2][0])
+    }
+
+    /// [`ScreenTriangle::perspective_planes`] with each plane in the lanes `(c, dx, dy, 0)` of
+    /// one AVX register: the same operations.
+    #[cfg(target_arch = "x86_64")]
+    #[inline]
+    #[target_feature(enable = "avx")]
+    pub(crate) fn perspective_planes_x4(&self) -> ([std::arch::x86_64::__m256d; 3], f64) {
+        use std::arch::x86_64::*;
+        let (x, y) = (self.x0 as f64, self.y0 as f64);
+        let [e0, e1, e2] = &self.edges;
+        let e = [e0.plane_at(x, y), e1.plane_at(x, y), e2.plane_at(x, y)];
+        let plane = |[c, dx, dy]: [f64; 3], inv_w: f64| {
+            _mm256_mul_pd(_mm256_setr_pd(c, dx, dy, 0.0), _mm256_set1_pd(inv_w))
+        };
+        let planes = [
+            plane(e[0], self.inv_w[0]),
+            plane(e[1], self.inv_w[1]),
+            plane(e[2], self.inv_w[2]),
+        ];
         (planes, e[0][0] + e[1][0] + e[2][0])
     }
 }
@@ -612,9 +673,67 @@ fn scan(st: &ScreenTriangle, y0: i32, y1: i32, mut f: impl FnMut(i32, i32, f32))
     }
 }
 
-/// Clips, projects and sets up mesh triangle `t` (index `id`), appending 0–3 screen triangles.
+/// A mesh vertex after steps 1–2 of Algorithm 3, computed once per vertex rather than once per
+/// triangle using it: clip coordinates (Eq. (6.1)), the frustum planes it lies outside of, and
+/// its pixel position and `1/w` (what the triangles that need no clipping use).
+#[derive(Clone, Copy, Debug, Default)]
+struct ProjectedVertex {
+    clip: [f64; 4],
+    /// Pixel position: perspective divide, then [`viewport`].
+    pixel: [f64; 2],
+    /// `1/w = 1/z_camera`.
+    inv_w: f64,
+    /// One bit per frustum plane the vertex is outside of ([`outcode`]).
+    outcode: u8,
+}
+
+impl ProjectedVertex {
+    #[inline(always)]
+    fn new(clip: [f64; 4], width: u32, height: u32) -> ProjectedVertex {
+        let (pixel, inv_w) = to_screen(&clip, width, height);
+        ProjectedVertex {
+            clip,
+            pixel,
+            inv_w,
+            outcode: outcode(&clip),
+        }
+    }
+}
+
+/// The frustum planes clip-space point `v` is outside of, one bit each: right, left, top,
+/// bottom, near, far (valid in homogeneous space, for trivial rejection).
+#[inline(always)]
+fn outcode(v: &[f64; 4]) -> u8 {
+    ((v[3] - v[0] < 0.0) as u8)
+        | ((v[3] + v[0] < 0.0) as u8) << 1
+        | ((v[3] - v[1] < 0.0) as u8) << 2
+        | ((v[3] + v[1] < 0.0) as u8) << 3
+        | ((near_distance(*v) < 0.0) as u8) << 4
+        | ((far_distance(*v) < 0.0) as u8) << 5
+}
+
+/// The outcode bits of the near and far planes, the ones clipped geometrically.
+const NEAR_FAR: u8 = 0b11_0000;
+
+/// Perspective divide and viewport: the pixel position and `1/w` of clip-space point `c`.
+#[inline(always)]
+fn to_screen(c: &[f64; 4], width: u32, height: u32) -> ([f64; 2], f64) {
+    let inv_w = 1.0 / c[3];
+    (viewport(width, height, [c[0] * inv_w, c[1] * inv_w]), inv_w)
+}
+
+/// Corners of a triangle about to be set up: pixel positions, `1/w`, and barycentric
+/// coordinates in the mesh triangle (`f32`: they only weight attributes).
+struct Corners {
+    pixel: [[f64; 2]; 3],
+    inv_w: [f64; 3],
+    bary: [[f32; 3]; 3],
+}
+
+/// Rejects, clips and sets up mesh triangle `t` (index `id`) over the projected `vertices`,
+/// appending 0–3 screen triangles.
 fn setup_triangle(
-    clip: &[[f64; 4]],
+    vertices: &[ProjectedVertex],
     t: [u32; 3],
     id: u32,
     width: u32,
@@ -622,120 +741,149 @@ fn setup_triangle(
     cull: CullMode,
     out: &mut Vec<ScreenTriangle>,
 ) {
-    let c = [
-        clip[t[0] as usize],
-        clip[t[1] as usize],
-        clip[t[2] as usize],
+    let v = [
+        &vertices[t[0] as usize],
+        &vertices[t[1] as usize],
+        &vertices[t[2] as usize],
     ];
-    // Trivial rejection: all corners outside one frustum plane (valid in homogeneous space),
-    // with one outcode bit per plane.
-    let outcode = |v: [f64; 4]| -> u8 {
-        ((v[3] - v[0] < 0.0) as u8)
-            | ((v[3] + v[0] < 0.0) as u8) << 1
-            | ((v[3] - v[1] < 0.0) as u8) << 2
-            | ((v[3] + v[1] < 0.0) as u8) << 3
-            | ((near_distance(v) < 0.0) as u8) << 4
-            | ((far_distance(v) < 0.0) as u8) << 5
-    };
-    let o = [outcode(c[0]), outcode(c[1]), outcode(c[2])];
+    // Trivial rejection: all corners outside one frustum plane.
+    let o = [v[0].outcode, v[1].outcode, v[2].outcode];
     if o[0] & o[1] & o[2] != 0 {
+        return;
+    }
+    // Between the near and far planes (almost always) the triangle is its own clipped polygon,
+    // with its vertices already projected.
+    if (o[0] | o[1] | o[2]) & NEAR_FAR == 0 {
+        let corners = Corners {
+            pixel: [v[0].pixel, v[1].pixel, v[2].pixel],
+            inv_w: [v[0].inv_w, v[1].inv_w, v[2].inv_w],
+            bary: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        };
+        set_up_corners(corners, true, id, width, height, cull, out);
         return;
     }
     let corner = |k: usize| {
         let mut bary = [0.0; 3];
         bary[k] = 1.0;
-        ClipVertex { clip: c[k], bary }
+        ClipVertex {
+            clip: v[k].clip,
+            bary,
+        }
     };
-    let corners = [corner(0), corner(1), corner(2)];
-    // Between the near and far planes (almost always) the triangle is its own clipped polygon.
-    const NEAR_FAR: u8 = 0b11_0000;
-    if (o[0] | o[1] | o[2]) & NEAR_FAR == 0 {
-        set_up_fan(&corners, id, width, height, cull, out);
-    } else {
-        set_up_fan(
-            clip_triangle(corners).vertices(),
-            id,
-            width,
-            height,
-            cull,
-            out,
-        );
+    let polygon = clip_triangle([corner(0), corner(1), corner(2)]);
+    let vs = polygon.vertices();
+    // The fan around `vs[0]` (nothing for fewer than 3 vertices).
+    let project = |v: &ClipVertex| (to_screen(&v.clip, width, height), v.bary.map(|b| b as f32));
+    let first = project(&vs[0]);
+    for i in 1..vs.len().saturating_sub(1) {
+        let (((p1, w1), b1), ((p2, w2), b2)) = (project(&vs[i]), project(&vs[i + 1]));
+        let corners = Corners {
+            pixel: [first.0 .0, p1, p2],
+            inv_w: [first.0 .1, w1, w2],
+            bary: [first.1, b1, b2],
+        };
+        set_up_corners(corners, false, id, width, height, cull, out);
     }
 }
 
-/// Projects the convex polygon `vs` (clip space, inside the near and far planes) and sets up
-/// the triangles of its fan around `vs[0]`, for mesh triangle `id`; nothing for fewer than 3
-/// vertices.
+/// Sets up the triangle `c` (inside the near and far planes) for mesh triangle `id`: culling,
+/// orientation, edge functions and bounding box; nothing for degenerate or culled triangles and
+/// those whose box holds no pixel centre. `unclipped`: the corners are the mesh triangle's
+/// vertices in order.
 #[inline(always)]
-fn set_up_fan(
-    vs: &[ClipVertex],
+fn set_up_corners(
+    c: Corners,
+    unclipped: bool,
     id: u32,
     width: u32,
     height: u32,
     cull: CullMode,
     out: &mut Vec<ScreenTriangle>,
 ) {
-    if vs.len() < 3 {
+    let Corners {
+        pixel: mut p,
+        mut inv_w,
+        mut bary,
+    } = c;
+    let area = signed_area2(&p);
+    if !(area.is_finite() && area != 0.0) {
         return;
     }
-    let to_screen = |v: &ClipVertex| {
-        let inv_w = 1.0 / v.clip[3];
-        let px = viewport(width, height, [v.clip[0] * inv_w, v.clip[1] * inv_w]);
-        (px, inv_w)
-    };
-    let first = to_screen(&vs[0]);
-    for i in 1..vs.len() - 1 {
-        let (p1, p2) = (to_screen(&vs[i]), to_screen(&vs[i + 1]));
-        let mut p = [first.0, p1.0, p2.0];
-        let mut inv_w = [first.1, p1.1, p2.1];
-        let to_f32 = |b: [f64; 3]| [b[0] as f32, b[1] as f32, b[2] as f32];
-        let mut bary = [
-            to_f32(vs[0].bary),
-            to_f32(vs[i].bary),
-            to_f32(vs[i + 1].bary),
-        ];
-        let area = signed_area2(&p);
-        if !(area.is_finite() && area != 0.0) {
-            continue;
-        }
-        let front_facing = area < 0.0;
-        match cull {
-            CullMode::Back if !front_facing => continue,
-            CullMode::Front if front_facing => continue,
-            _ => {}
-        }
-        if area < 0.0 {
-            p.swap(1, 2);
-            inv_w.swap(1, 2);
-            bary.swap(1, 2);
-        }
-        let xmin = p[0][0].min(p[1][0]).min(p[2][0]);
-        let xmax = p[0][0].max(p[1][0]).max(p[2][0]);
-        let ymin = p[0][1].min(p[1][1]).min(p[2][1]);
-        let ymax = p[0][1].max(p[1][1]).max(p[2][1]);
-        let x0 = xmin.ceil().max(0.0);
-        let x1 = xmax.floor().min(width as f64 - 1.0);
-        let y0 = ymin.ceil().max(0.0);
-        let y1 = ymax.floor().min(height as f64 - 1.0);
-        if !(x0 <= x1 && y0 <= y1) {
-            continue;
-        }
-        out.push(ScreenTriangle {
-            edges: [
-                Edge::new(p[1], p[2]),
-                Edge::new(p[2], p[0]),
-                Edge::new(p[0], p[1]),
-            ],
-            inv_w,
-            bary,
-            x0: x0 as i32,
-            x1: x1 as i32,
-            y0: y0 as i32,
-            y1: y1 as i32,
-            triangle: id,
-            front_facing,
-        });
+    let front_facing = area < 0.0;
+    match cull {
+        CullMode::Back if !front_facing => return,
+        CullMode::Front if front_facing => return,
+        _ => {}
     }
+    if area < 0.0 {
+        p.swap(1, 2);
+        inv_w.swap(1, 2);
+        bary.swap(1, 2);
+    }
+    let vertex_corners = match (unclipped, area < 0.0) {
+        (true, false) => Some([0, 1, 2]),
+        (true, true) => Some([0, 2, 1]),
+        // A crossing point can round to a vertex's barycentrics in `f32`.
+        (false, _) => corner_of_vertex(&bary),
+    };
+    // A finite area means finite corners.
+    let (x0, x1) = pixel_centres(
+        p[0][0].min(p[1][0]).min(p[2][0]),
+        p[0][0].max(p[1][0]).max(p[2][0]),
+        width,
+    );
+    let (y0, y1) = pixel_centres(
+        p[0][1].min(p[1][1]).min(p[2][1]),
+        p[0][1].max(p[1][1]).max(p[2][1]),
+        height,
+    );
+    if x0 > x1 || y0 > y1 {
+        return;
+    }
+    out.push(ScreenTriangle {
+        edges: [
+            Edge::new(p[1], p[2]),
+            Edge::new(p[2], p[0]),
+            Edge::new(p[0], p[1]),
+        ],
+        inv_w,
+        bary,
+        vertex_corners,
+        x0,
+        x1,
+        y0,
+        y1,
+        triangle: id,
+        front_facing,
+    });
+}
+
+/// The pixel centres `⌈lo⌉ ..= ⌊hi⌋` of `0..n` (empty when the first exceeds the last) for
+/// finite `lo ≤ hi`. Clamped to `[0, n]` and `[−1, n − 1]` first (which keeps the result), where
+/// truncation is exact and cheap: `f64::ceil` and `floor` are libm calls on baseline x86-64.
+#[inline(always)]
+fn pixel_centres(lo: f64, hi: f64, n: u32) -> (i32, i32) {
+    let lo = lo.max(0.0).min(n as f64);
+    let hi = hi.min(n as f64 - 1.0).max(-1.0);
+    let (first, last) = (lo as i32, hi as i32);
+    (
+        first + ((first as f64) < lo) as i32,
+        last - ((last as f64) > hi) as i32,
+    )
+}
+
+/// For corners with barycentrics `bc` in the mesh triangle, the corner of each vertex
+/// (`corner[j] = i` where `bc[i] = e_j`), or `None` unless the corners are the vertices.
+fn corner_of_vertex(bc: &[[f32; 3]; 3]) -> Option<[u8; 3]> {
+    let mut corner = [u8::MAX; 3];
+    for (i, row) in bc.iter().enumerate() {
+        let j = row.iter().position(|&b| b == 1.0)?;
+        if row.iter().filter(|&&b| b == 0.0).count() != 2 {
+            return None;
+        }
+        corner[j] = i as u8;
+    }
+    corner.iter().all(|&i| i < 3).then_some(corner)
 }
 
 #[cfg(test)]
