@@ -115,8 +115,6 @@ pub struct Renderer {
     object_normals: Vec<[f64; 3]>,
     /// Per vertex, the channels interpolated across set-ups (camera-space normal, albedo source).
     channels: VertexChannels,
-    /// Per tile, the interpolation planes of its set-ups (in bin order).
-    planes: Vec<Vec<SetupPlanes>>,
 }
 
 impl Renderer {
@@ -216,44 +214,49 @@ impl Renderer {
         };
         let tile_len = TILE_ROWS * k.width as usize;
         let n_tiles = (k.height as usize).div_ceil(TILE_ROWS);
-        self.planes.resize_with(n_tiles, Vec::new);
         let tiles = frame
             .color
             .par_chunks_mut(tile_len)
             .zip(frame.depth.data.par_chunks_mut(tile_len))
             .zip(optional_tiles(&mut frame.triangle_id, tile_len, n_tiles))
             .zip(optional_tiles(&mut frame.barycentrics, tile_len, n_tiles))
-            .zip(self.planes.par_iter_mut())
-            .map(|((((color, depth), triangle), bary), planes)| {
-                let rows = Rows {
-                    color,
-                    depth,
-                    triangle,
-                    bary,
-                };
-                (rows, planes)
+            .map(|(((color, depth), triangle), bary)| Rows {
+                color,
+                depth,
+                triangle,
+                bary,
             });
         self.rasterizer
-            .scan_tiles(tiles, |(out, planes), row0, chunks, bin, index| {
-                // Step 7's interpolation planes of the tile's set-ups, computed here so that
-                // they are in cache for its pixels (a set-up overlapping two tiles is done
-                // twice; all of them up front were mostly out of cache by their turn).
-                SetupPlanes::of_bin(planes, bin, chunks, &mesh.triangles, channels);
-                let tile = TileSetups {
-                    chunks,
-                    bin,
-                    planes,
-                };
-                BLOCK.with_borrow_mut(|block| pass.shade_tile(block, row0, tile, index, out))
+            .scan_tiles(tiles, |out, row0, chunks, bin, index| {
+                TILE_SCRATCH.with_borrow_mut(|TileScratch { planes, block }| {
+                    // Step 7's interpolation planes of the tile's set-ups, computed here so
+                    // that they are in cache for its pixels (a set-up overlapping two tiles is
+                    // done twice; all of them up front were mostly out of cache by their turn).
+                    SetupPlanes::of_bin(planes, bin, chunks, &mesh.triangles, channels);
+                    let tile = TileSetups {
+                        chunks,
+                        bin,
+                        planes,
+                    };
+                    pass.shade_tile(block, row0, tile, index, out)
+                })
             });
         Ok(())
     }
 }
 
+/// A worker thread's scratch for the tiles it shades, kept across tiles and frames so that it
+/// stays in cache: one planes buffer per tile was written from memory every frame, and a fresh
+/// [`Block`] per tile zeroed its 7 KiB for nothing (lanes are written before they are read).
+#[derive(Default)]
+struct TileScratch {
+    /// The interpolation planes of the tile's set-ups (in bin order).
+    planes: Vec<SetupPlanes>,
+    block: Block,
+}
+
 thread_local! {
-    /// Each worker thread's shading scratch, kept across tiles and frames (a fresh one per tile
-    /// zeroed its 7 KiB for nothing: lanes are written before they are read).
-    static BLOCK: RefCell<Block> = RefCell::new(Block::default());
+    static TILE_SCRATCH: RefCell<TileScratch> = RefCell::new(TileScratch::default());
 }
 
 /// The tiles (`tile_len` elements each) of an optional frame buffer, or `n_tiles` empty tiles

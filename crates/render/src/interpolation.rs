@@ -35,6 +35,17 @@ impl Plane {
         }
     }
 
+    /// `Σ planes_i`: [`Plane::combine`] with unit weights (`1 · x = x` exactly).
+    #[inline(always)]
+    fn sum(planes: &[Plane; 3]) -> Plane {
+        let [p, q, r] = planes;
+        Plane {
+            c: p.c + q.c + r.c,
+            dx: p.dx + q.dx + r.dx,
+            dy: p.dy + q.dy + r.dy,
+        }
+    }
+
     /// The function along row `v = y − y₀`: its value at `x = x₀` and its slope.
     #[inline(always)]
     pub fn row(&self, v: f64) -> RowLine {
@@ -217,7 +228,7 @@ impl SetupPlanes {
         SetupPlanes {
             origin: st.origin(),
             edge_sum,
-            inverse_depth: Plane::combine(&q, [1.0; 3]),
+            inverse_depth: Plane::sum(&q),
             normal: [channel(0), channel(1), channel(2)],
             albedo: [albedo(0), albedo(1), albedo(2)],
         }
@@ -264,7 +275,7 @@ impl SetupPlanes {
         SetupPlanes {
             origin: st.origin(),
             edge_sum,
-            inverse_depth: plane_of_x4(combine_x4(&q, [1.0; 3])),
+            inverse_depth: plane_of_x4(sum_x4(&q)),
             normal: [channel(0), channel(1), channel(2)],
             albedo: [albedo(0), albedo(1), albedo(2)],
         }
@@ -283,6 +294,16 @@ fn combine_x4(planes: &[std::arch::x86_64::__m256d; 3], a: [f64; 3]) -> std::arc
         _mm256_add_pd(term(a[0], *p), term(a[1], *q)),
         term(a[2], *r),
     )
+}
+
+/// [`Plane::sum`] on planes in the lanes `(c, dx, dy, 0)`.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx")]
+fn sum_x4(planes: &[std::arch::x86_64::__m256d; 3]) -> std::arch::x86_64::__m256d {
+    use std::arch::x86_64::_mm256_add_pd;
+    let [p, q, r] = planes;
+    _mm256_add_pd(_mm256_add_pd(*p, *q), *r)
 }
 
 /// The [`Plane`] in the lanes `(c, dx, dy, ·)`.

@@ -27,10 +27,11 @@
 //!   ([`clip`]); the side planes by rejection and scissoring.
 //! - **Orientation**: a triangle is front-facing when `(v₁ − v₀) × (v₂ − v₀)` points towards
 //!   the camera (counter-clockwise on screen). Both sides are drawn unless culling is asked for.
-//! - **Parallelism**: triangle set-up and scan conversion run on rayon's pool; scan conversion
-//!   is split into tiles of [`TILE_ROWS`] image rows, each owning its part of the z-buffer. The
-//!   tile scan and the shading pass also have AVX2 builds chosen at run time, with identical
-//!   results (no float contraction or reordering).
+//! - **Parallelism**: every per-vertex and per-triangle pass (validation, transforms, normals,
+//!   set-up, binning) and scan conversion run on rayon's pool; scan conversion is split into
+//!   tiles of [`TILE_ROWS`] image rows, each owning its part of the z-buffer. These passes, the
+//!   interpolation planes, the tile scan and the shading pass also have AVX2 builds chosen at run
+//!   time, with identical results (no float contraction or reordering).
 //!
 //! # Decisions where the paper, the ERRATA and issue 4 are silent
 //! - `P` carries `(2cx + 1)/W` instead of ERRATA 12's `2cx/W` because pixel centres sit at
@@ -53,6 +54,7 @@
 //! - [`Rasterizer`]: reusable state for repeated frames; [`Rasterizer::fragment`] gives exact
 //!   per-pixel depth and barycentrics.
 
+mod avx2;
 pub mod camera;
 pub mod clip;
 pub mod color;

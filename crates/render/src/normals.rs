@@ -2,6 +2,7 @@
 
 use rayon::prelude::*;
 
+use crate::avx2::with_avx2;
 use crate::mat4::{cross, normalize, sub, Mat3};
 use crate::RenderError;
 
@@ -52,26 +53,41 @@ pub fn vertex_normals_into(vertices: &[[f64; 3]], triangles: &[[u32; 3]], acc: &
     acc.par_chunks_mut(range_len)
         .enumerate()
         .for_each(|(r, sums)| {
-            let (first, len) = (r * range_len, sums.len());
-            // The position in `sums` of vertex `i`, if in the range.
-            let local = |i: u32| Some((i as usize).wrapping_sub(first)).filter(|&k| k < len);
-            for t in triangles {
-                if t.iter().all(|&i| local(i).is_none()) {
-                    continue;
-                }
-                let [a, b, c] = t.map(|i| vertices[i as usize]);
-                let n = cross(sub(b, a), sub(c, a));
-                for k in t.iter().filter_map(|&i| local(i)) {
-                    let s = &mut sums[k];
-                    s[0] += n[0];
-                    s[1] += n[1];
-                    s[2] += n[2];
-                }
-            }
-            for n in sums.iter_mut() {
-                *n = normalize(*n);
-            }
+            with_avx2(
+                #[inline(always)]
+                || range_normals(vertices, triangles, r * range_len, sums),
+            )
         });
+}
+
+/// The unit area-weighted normals of the vertices `first..first + sums.len()` into `sums`
+/// (zeros on entry): the face normals of the triangles touching the range, in triangle order.
+#[inline(always)]
+fn range_normals(
+    vertices: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    first: usize,
+    sums: &mut [[f64; 3]],
+) {
+    let len = sums.len();
+    // The position in `sums` of vertex `i`, if in the range.
+    let local = |i: u32| Some((i as usize).wrapping_sub(first)).filter(|&k| k < len);
+    for t in triangles {
+        if t.iter().all(|&i| local(i).is_none()) {
+            continue;
+        }
+        let [a, b, c] = t.map(|i| vertices[i as usize]);
+        let n = cross(sub(b, a), sub(c, a));
+        for k in t.iter().filter_map(|&i| local(i)) {
+            let s = &mut sums[k];
+            s[0] += n[0];
+            s[1] += n[1];
+            s[2] += n[2];
+        }
+    }
+    for n in sums.iter_mut() {
+        *n = normalize(*n);
+    }
 }
 
 /// Fewest vertices per parallel range of [`vertex_normals_into`].
@@ -129,6 +145,10 @@ mod tests {
             pool.install(|| vertex_normals(&v, &t))
         };
         let serial = in_pool(1);
+        // The baseline build (no AVX2) of the one range of one thread.
+        let mut baseline = vec![[0.0; 3]; v.len()];
+        range_normals(&v, &t, 0, &mut baseline);
+        assert_eq!(serial, baseline);
         for threads in [2, 3, 8] {
             let parallel = in_pool(threads);
             for (a, b) in serial.iter().zip(&parallel) {

@@ -19,6 +19,7 @@ use std::cell::RefCell;
 
 use rayon::prelude::*;
 
+use crate::avx2::with_avx2;
 use crate::camera::Camera;
 use crate::clip::{clip_triangle, far_distance, near_distance, ClipVertex};
 use crate::edge::{signed_area2, Edge};
@@ -29,6 +30,9 @@ use crate::RenderError;
 
 /// Image rows per tile: the unit of parallel work and of visibility-buffer ownership.
 pub const TILE_ROWS: usize = 16;
+
+/// Vertices per parallel task of the vertex transforms.
+const VERTEX_CHUNK: usize = 4096;
 
 /// Triangles per parallel set-up task (at least; grows for huge meshes so that the chunk count
 /// fits the 16-bit half of a set-up id).
@@ -200,13 +204,17 @@ impl Rasterizer {
         self.vertices
             .resize(positions.len(), ProjectedVertex::default());
         positions
-            .par_iter()
-            .zip(self.camera_positions.par_iter_mut())
-            .zip(self.vertices.par_iter_mut())
-            .with_min_len(4096)
-            .for_each(|((p, cam), v)| {
-                *cam = model_view.transform_point(*p);
-                *v = ProjectedVertex::new(to_clip.transform_point4(*cam), width, height);
+            .par_chunks(VERTEX_CHUNK)
+            .zip(self.camera_positions.par_chunks_mut(VERTEX_CHUNK))
+            .zip(self.vertices.par_chunks_mut(VERTEX_CHUNK))
+            .for_each(|((positions, camera), vertices)| {
+                with_avx2(
+                    #[inline(always)]
+                    || {
+                        let size = [width, height];
+                        project_vertices(positions, &model_view, &to_clip, camera, vertices, size)
+                    },
+                )
             });
 
         // Triangle set-up, in parallel over chunks; chunk order keeps triangle order.
@@ -232,10 +240,11 @@ impl Rasterizer {
                 out.clear();
                 bins.resize_with(n_tiles, Vec::new);
                 bins.iter_mut().for_each(Vec::clear);
-                for (i, t) in chunk.iter().enumerate() {
-                    let id = (c * chunk_len + i) as u32;
-                    setup_triangle(vertices, *t, id, width, height, cull, out);
-                }
+                let first = (c * chunk_len) as u32;
+                with_avx2(
+                    #[inline(always)]
+                    || set_up_triangles(vertices, chunk, first, [width, height], cull, out),
+                );
                 // Binning into row tiles, while the chunk's set-ups are in cache.
                 for (k, st) in out.iter().enumerate() {
                     let id = (c << 16 | k) as u32;
@@ -730,8 +739,42 @@ struct Corners {
     bary: [[f32; 3]; 3],
 }
 
+/// Steps 1–2 of Algorithm 3 for `positions`: their camera-space images under `model_view` into
+/// `camera`, and the clip-space images of those under `to_clip`, projected to an image of
+/// `size` pixels, into `vertices`.
+#[inline(always)]
+fn project_vertices(
+    positions: &[[f64; 3]],
+    model_view: &Mat4,
+    to_clip: &Mat4,
+    camera: &mut [[f64; 3]],
+    vertices: &mut [ProjectedVertex],
+    [width, height]: [u32; 2],
+) {
+    for ((p, cam), v) in positions.iter().zip(camera).zip(vertices) {
+        *cam = model_view.transform_point(*p);
+        *v = ProjectedVertex::new(to_clip.transform_point4(*cam), width, height);
+    }
+}
+
+/// [`setup_triangle`] for `triangles`, the first of which has index `first`, in order.
+#[inline(always)]
+fn set_up_triangles(
+    vertices: &[ProjectedVertex],
+    triangles: &[[u32; 3]],
+    first: u32,
+    [width, height]: [u32; 2],
+    cull: CullMode,
+    out: &mut Vec<ScreenTriangle>,
+) {
+    for (i, t) in triangles.iter().enumerate() {
+        setup_triangle(vertices, *t, first + i as u32, width, height, cull, out);
+    }
+}
+
 /// Rejects, clips and sets up mesh triangle `t` (index `id`) over the projected `vertices`,
 /// appending 0–3 screen triangles.
+#[inline(always)]
 fn setup_triangle(
     vertices: &[ProjectedVertex],
     t: [u32; 3],
@@ -938,6 +981,48 @@ mod tests {
             }
         }
         (positions, triangles)
+    }
+
+    #[test]
+    fn set_up_is_the_same_with_and_without_avx2() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let (positions, triangles) = soup(&mut rng);
+        let k = Intrinsics::new(333, 101, 150.0, 150.0, 166.0, 50.0).unwrap();
+        let camera = Camera::new(k).unwrap();
+        let model = Mat4::from_linear_translation(
+            crate::Mat3::rotation([0.1, 1.0, 0.2], 0.2),
+            [0.01, -0.02, 0.05],
+        );
+        for cull in [CullMode::None, CullMode::Back] {
+            // Through `with_avx2` (the AVX2 build on CPUs that have it) …
+            let mut r = Rasterizer::new();
+            r.set_up(&positions, &triangles, &model, &camera, cull)
+                .unwrap();
+            // … and the baseline build of the same functions.
+            let n = positions.len();
+            let (mut cam, mut vertices) = (vec![[0.0; 3]; n], vec![ProjectedVertex::default(); n]);
+            let model_view = camera.pose.matrix().mul(&model);
+            let size = [k.width, k.height];
+            let to_clip = camera.camera_to_clip();
+            project_vertices(
+                &positions,
+                &model_view,
+                &to_clip,
+                &mut cam,
+                &mut vertices,
+                size,
+            );
+            let mut setups = Vec::new();
+            set_up_triangles(&vertices, &triangles, 0, size, cull, &mut setups);
+            assert_eq!(format!("{:?}", r.vertices), format!("{vertices:?}"));
+            assert_eq!(r.camera_positions, cam);
+            let all: Vec<_> = r.screen_triangles().collect();
+            assert!(all.len() > 1000, "{} set-ups", all.len());
+            assert_eq!(
+                format!("{all:?}"),
+                format!("{:?}", setups.iter().collect::<Vec<_>>())
+            );
+        }
     }
 
     #[test]
