@@ -32,7 +32,8 @@ pub fn transform_normal(n: &Mat3, normal: [f64; 3]) -> [f64; 3] {
 /// vertices of no or only degenerate triangles), #V × 3. Indices must be valid.
 ///
 /// # Panics
-/// If a triangle index is out of range (callers validate meshes first).
+/// If a triangle index is out of range (callers validate meshes first), unless all three are:
+/// such a triangle touches no vertex and is skipped.
 pub fn vertex_normals(vertices: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
     let mut normals = Vec::new();
     vertex_normals_into(vertices, triangles, &mut normals);

@@ -870,16 +870,8 @@ fn set_up_corners(
         (false, _) => corner_of_vertex(&bary),
     };
     // A finite area means finite corners.
-    let (x0, x1) = pixel_centres(
-        p[0][0].min(p[1][0]).min(p[2][0]),
-        p[0][0].max(p[1][0]).max(p[2][0]),
-        width,
-    );
-    let (y0, y1) = pixel_centres(
-        p[0][1].min(p[1][1]).min(p[2][1]),
-        p[0][1].max(p[1][1]).max(p[2][1]),
-        height,
-    );
+    let (x0, x1) = pixel_centres(p.map(|c| c[0]), width);
+    let (y0, y1) = pixel_centres(p.map(|c| c[1]), height);
     if x0 > x1 || y0 > y1 {
         return;
     }
@@ -901,13 +893,18 @@ fn set_up_corners(
     });
 }
 
-/// The pixel centres `⌈lo⌉ ..= ⌊hi⌋` of `0..n` (empty when the first exceeds the last) for
-/// finite `lo ≤ hi`. Clamped to `[0, n]` and `[−1, n − 1]` first (which keeps the result), where
-/// truncation is exact and cheap: `f64::ceil` and `floor` are libm calls on baseline x86-64.
+/// The pixel centres `⌈lo⌉ ..= ⌊hi⌋` of `0..n` (empty when the first exceeds the last) between
+/// the least `lo` and the greatest `hi` of the finite coordinates `v`. Clamped to `[0, n]` and
+/// `[−1, n − 1]` first (which keeps the result), where truncation is exact and cheap:
+/// `f64::ceil` and `floor` are libm calls on baseline x86-64. Minima and maxima by comparison:
+/// `f64::min` and `max` also handle NaN (and may differ only in the sign of a zero).
 #[inline(always)]
-fn pixel_centres(lo: f64, hi: f64, n: u32) -> (i32, i32) {
-    let lo = lo.max(0.0).min(n as f64);
-    let hi = hi.min(n as f64 - 1.0).max(-1.0);
+fn pixel_centres(v: [f64; 3], n: u32) -> (i32, i32) {
+    let min = |a: f64, b: f64| if b < a { b } else { a };
+    let max = |a: f64, b: f64| if b > a { b } else { a };
+    let n = n as f64;
+    let lo = min(max(min(min(v[0], v[1]), v[2]), 0.0), n);
+    let hi = max(min(max(max(v[0], v[1]), v[2]), n - 1.0), -1.0);
     let (first, last) = (lo as i32, hi as i32);
     (
         first + ((first as f64) < lo) as i32,
