@@ -10,6 +10,7 @@
 
 use visage_camera::{DepthKind, Intrinsics};
 
+use crate::avx2::with_avx2;
 use crate::frame::Albedo;
 use crate::interpolation::SetupPlanes;
 use crate::rasterize::{ScreenTriangle, NO_TRIANGLE};
@@ -94,8 +95,8 @@ impl DeferredPass<'_> {
     /// (positions in `tile.bin`, replaced here by set-up ids) into `out`.
     ///
     /// On x86-64 CPUs with AVX2 the pass is compiled a second time for 256-bit vectors and chosen
-    /// at run time; Rust never fuses or reorders floating-point operations, so the results are
-    /// identical.
+    /// at run time ([`with_avx2`]); Rust never fuses or reorders floating-point operations, so the
+    /// results are identical.
     pub(crate) fn shade_tile(
         &self,
         block: &mut Block,
@@ -104,26 +105,10 @@ impl DeferredPass<'_> {
         index: &mut [u32],
         out: Rows<'_>,
     ) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            unsafe { self.shade_tile_avx2(block, row0, tile, index, out) };
-            return;
-        }
-        self.shade_tile_inline(block, row0, tile, index, out);
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn shade_tile_avx2(
-        &self,
-        block: &mut Block,
-        row0: usize,
-        tile: TileSetups<'_>,
-        index: &mut [u32],
-        out: Rows<'_>,
-    ) {
-        self.shade_tile_inline(block, row0, tile, index, out);
+        with_avx2(
+            #[inline(always)]
+            || self.shade_tile_inline(block, row0, tile, index, out),
+        )
     }
 
     #[inline(always)]
