@@ -10,11 +10,11 @@
 
 use visage_camera::{DepthKind, Intrinsics};
 
-use crate::avx2::with_avx2;
 use crate::frame::Albedo;
 use crate::interpolation::SetupPlanes;
 use crate::rasterize::{ScreenTriangle, NO_TRIANGLE};
 use crate::shading::{BlinnPhong, SurfaceLanes, LANES};
+use crate::simd::with_simd;
 use crate::texture::TapLanes;
 
 /// Pixels of a span evaluated together (four `f64` lanes: one AVX2 register).
@@ -94,9 +94,9 @@ impl DeferredPass<'_> {
     /// Shades the tile of image rows from `row0` on whose visibility buffer is `index`
     /// (positions in `tile.bin`, replaced here by set-up ids) into `out`.
     ///
-    /// On x86-64 CPUs with AVX2 the pass is compiled a second time for 256-bit vectors and chosen
-    /// at run time ([`with_avx2`]); Rust never fuses or reorders floating-point operations, so the
-    /// results are identical.
+    /// On x86-64 CPUs with AVX-512 or AVX2 the pass is compiled again for their wide vectors and
+    /// chosen at run time ([`with_simd`]); Rust never fuses or reorders floating-point
+    /// operations, so the results are identical.
     pub(crate) fn shade_tile(
         &self,
         block: &mut Block,
@@ -105,7 +105,7 @@ impl DeferredPass<'_> {
         index: &mut [u32],
         out: Rows<'_>,
     ) {
-        with_avx2(
+        with_simd(
             #[inline(always)]
             || self.shade_tile_inline(block, row0, tile, index, out),
         )
@@ -205,7 +205,7 @@ impl DeferredPass<'_> {
             // The set-up's planes along this row, in `u = x − x₀`.
             let v = (y as i64 - sp.origin[1] as i64) as f64;
             let inverse_depth = sp.inverse_depth.row(v);
-            // (Arrays written out: `[T; N]::map` was left out of line, without AVX2.)
+            // (Arrays written out: `[T; N]::map` was left out of line, without the wide build's vectors.)
             let [n0, n1, n2] = &sp.normal;
             let normal = [n0.row(v), n1.row(v), n2.row(v)];
             let [a0, a1, a2] = &sp.albedo;

@@ -54,7 +54,6 @@
 //! - [`Rasterizer`]: reusable state for repeated frames; [`Rasterizer::fragment`] gives exact
 //!   per-pixel depth and barycentrics.
 
-mod avx2;
 pub mod camera;
 pub mod clip;
 pub mod color;
@@ -72,6 +71,7 @@ pub mod projection;
 pub mod projective;
 pub mod rasterize;
 pub mod shading;
+mod simd;
 pub mod texture;
 pub mod turntable;
 mod validate;

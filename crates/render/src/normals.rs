@@ -2,8 +2,8 @@
 
 use rayon::prelude::*;
 
-use crate::avx2::with_avx2;
 use crate::mat4::{cross, normalize, sub, Mat3};
+use crate::simd::with_simd;
 use crate::RenderError;
 
 /// The normal matrix `N = (A⁻¹)ᵀ` of the linear part `A` of a transform (Eq. (6.2)): if `t` is
@@ -54,7 +54,7 @@ pub fn vertex_normals_into(vertices: &[[f64; 3]], triangles: &[[u32; 3]], acc: &
     acc.par_chunks_mut(range_len)
         .enumerate()
         .for_each(|(r, sums)| {
-            with_avx2(
+            with_simd(
                 #[inline(always)]
                 || range_normals(vertices, triangles, r * range_len, sums),
             )
@@ -146,7 +146,7 @@ mod tests {
             pool.install(|| vertex_normals(&v, &t))
         };
         let serial = in_pool(1);
-        // The baseline build (no AVX2) of the one range of one thread.
+        // The baseline build (no AVX-512 or AVX2) of the one range of one thread.
         let mut baseline = vec![[0.0; 3]; v.len()];
         range_normals(&v, &t, 0, &mut baseline);
         assert_eq!(serial, baseline);

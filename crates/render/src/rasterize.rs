@@ -19,13 +19,13 @@ use std::cell::RefCell;
 
 use rayon::prelude::*;
 
-use crate::avx2::with_avx2;
 use crate::camera::Camera;
 use crate::clip::{clip_triangle, far_distance, near_distance, ClipVertex};
 use crate::edge::{signed_area2, Edge};
 use crate::interpolation::Plane;
 use crate::mat4::Mat4;
 use crate::projection::viewport;
+use crate::simd::with_simd;
 use crate::RenderError;
 
 /// Image rows per tile: the unit of parallel work and of visibility-buffer ownership.
@@ -208,7 +208,7 @@ impl Rasterizer {
             .zip(self.camera_positions.par_chunks_mut(VERTEX_CHUNK))
             .zip(self.vertices.par_chunks_mut(VERTEX_CHUNK))
             .for_each(|((positions, camera), vertices)| {
-                with_avx2(
+                with_simd(
                     #[inline(always)]
                     || {
                         let size = [width, height];
@@ -241,7 +241,7 @@ impl Rasterizer {
                 bins.resize_with(n_tiles, Vec::new);
                 bins.iter_mut().for_each(Vec::clear);
                 let first = (c * chunk_len) as u32;
-                with_avx2(
+                with_simd(
                     #[inline(always)]
                     || set_up_triangles(vertices, chunk, first, [width, height], cull, out),
                 );
@@ -981,7 +981,7 @@ mod tests {
     }
 
     #[test]
-    fn set_up_is_the_same_with_and_without_avx2() {
+    fn set_up_is_the_same_with_and_without_wide_vectors() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let (positions, triangles) = soup(&mut rng);
         let k = Intrinsics::new(333, 101, 150.0, 150.0, 166.0, 50.0).unwrap();
@@ -991,7 +991,7 @@ mod tests {
             [0.01, -0.02, 0.05],
         );
         for cull in [CullMode::None, CullMode::Back] {
-            // Through `with_avx2` (the AVX2 build on CPUs that have it) …
+            // Through `with_simd` (the AVX-512 or AVX2 build on CPUs that have them) …
             let mut r = Rasterizer::new();
             r.set_up(&positions, &triangles, &model, &camera, cull)
                 .unwrap();
