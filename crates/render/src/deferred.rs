@@ -193,17 +193,8 @@ impl DeferredPass<'_> {
         while x < w {
             let s = setups[x];
             let end = run_end(setups, x);
-            let found = (s != NO_TRIANGLE)
-                .then(|| {
-                    let (&id, sp) = (tile.bin.get(s as usize)?, tile.planes.get(s as usize)?);
-                    let st = tile
-                        .chunks
-                        .get((id >> 16) as usize)?
-                        .get((id & 0xffff) as usize)?;
-                    Some((id, st, sp))
-                })
-                .flatten();
-            let Some((id, st, sp)) = found else {
+            // (`NO_TRIANGLE` lies past the end of every bin.)
+            let Some((&id, sp)) = tile.bin.get(s as usize).zip(tile.planes.get(s as usize)) else {
                 fill_color(&mut c_row[x..end], self.background);
                 d_row[x..end].fill(0.0);
                 if let Some(t) = t_row.get_mut(x..end) {
@@ -217,21 +208,25 @@ impl DeferredPass<'_> {
             };
             // The visibility buffer gets the set-up id in place of the position in the bin.
             setups[x..end].fill(id);
-            if let Some(t) = t_row.get_mut(x..end) {
-                t.fill(st.triangle());
-            }
-            if let Some(b) = b_row.get_mut(x..end) {
-                // Exactly as the depth renderer computes them.
-                let rows = st.rows(yf);
-                for (x, bb) in (x..end).zip(b) {
-                    let (wt, _) = st.corner_weights(&rows, x as f64);
-                    *bb = st.mesh_bary(&wt).map(|v| v as f32);
+            // The set-up itself only for the optional buffers: the planes hold the rest.
+            if !(t_row.is_empty() && b_row.is_empty()) {
+                let st = &tile.chunks[(id >> 16) as usize][(id & 0xffff) as usize];
+                if let Some(t) = t_row.get_mut(x..end) {
+                    t.fill(st.triangle());
+                }
+                if let Some(b) = b_row.get_mut(x..end) {
+                    // Exactly as the depth renderer computes them.
+                    let rows = st.rows(yf);
+                    for (x, bb) in (x..end).zip(b) {
+                        let (wt, _) = st.corner_weights(&rows, x as f64);
+                        *bb = st.mesh_bary(&wt).map(|v| v as f32);
+                    }
                 }
             }
             // The set-up's planes along this row, in `u = x − x₀`.
             let v = (y as i64 - sp.origin[1] as i64) as f64;
             let inverse_depth = sp.inverse_depth.row(v);
-            // (Arrays written out: `[T; N]::map` was left out of line, without the wide build's vectors.)
+            // (Arrays written out: `[T; N]::map` was left out of line, outside the wide build.)
             let [n0, n1, n2] = &sp.normal;
             let normal = [n0.row(v), n1.row(v), n2.row(v)];
             let [a0, a1, a2] = &sp.albedo;
