@@ -1,24 +1,25 @@
 //! The deferred shading pass, steps 7–10 of Algorithm 3: every visible pixel of the visibility
 //! buffer is reconstructed exactly once (depth, normal, albedo source) and shaded by Eq. (6.4).
 //!
-//! A row is walked in spans of equal set-up id. Within a span the set-up's planes
-//! ([`crate::interpolation`]) are evaluated on groups of [`GROUP`] consecutive pixels (lane-wise
-//! arithmetic that compiles to SIMD code) into a block of [`LANES`] pixels held as structure of
-//! arrays; the rest (texture sampling, view vector, normalisation, the two-sided flip,
-//! Blinn–Phong) runs over the whole block in branch-free loops. Per pixel the operations and
-//! their order do not depend on how a row falls into groups and blocks.
+//! A row is walked pixel by pixel: a visible pixel evaluates all its set-up's planes
+//! ([`crate::interpolation`]) in a few vector operations, divides once for depth and every
+//! channel, and joins a block of [`LANES`] pixels held as structure of arrays; the block then
+//! samples the texture and computes the view vector, normalisation, two-sided flip and
+//! Blinn–Phong in branch-free lane-parallel loops. Background runs are skipped whole.
+//!
+//! Walking spans of equal set-up instead (the planes evaluated along the row, four pixels at a
+//! time) cost ~200 instructions per span and a mispredicted loop exit or two, for spans of 2–3
+//! pixels on average. Per pixel the operations and their order do not depend on how a row falls
+//! into blocks.
 
 use visage_camera::{DepthKind, Intrinsics};
 
 use crate::frame::Albedo;
-use crate::interpolation::SetupPlanes;
+use crate::interpolation::{SetupPlanes, ALBEDO, NORMAL};
 use crate::rasterize::{ScreenTriangle, NO_TRIANGLE};
 use crate::shading::{BlinnPhong, SurfaceLanes, LANES};
 use crate::simd::with_simd;
 use crate::texture::TapLanes;
-
-/// Pixels of a span evaluated together (four `f64` lanes: one AVX2 register).
-const GROUP: usize = 4;
 
 /// Sets every pixel of `pixels` to `color`; a grey (black, the default background) is one
 /// `f32` fill, which compiles to wide stores instead of 12-byte ones.
@@ -84,6 +85,8 @@ pub(crate) struct Block {
     len: usize,
     /// Their columns.
     column: [u32; LANES],
+    /// Their depth-buffer values.
+    depth: [f32; LANES],
     /// Their ray coordinate `x' = (u − c_x)/f_x`.
     ray_x: [f32; LANES],
     /// Their texel-space positions (textured albedo only, sampled at flush).
@@ -99,6 +102,7 @@ impl Default for Block {
         Block {
             len: 0,
             column: [0; LANES],
+            depth: [0.0; LANES],
             ray_x: [0.0; LANES],
             texel: [[0.0; LANES]; 2],
             taps: TapLanes::default(),
@@ -184,17 +188,17 @@ impl DeferredPass<'_> {
             bary: b_row,
         } = row;
         let k = &self.intrinsics;
-        let (inv_fx, inv_fy) = (1.0 / k.fx, 1.0 / k.fy);
         let yf = y as f64;
-        let yr = (yf - k.cy) * inv_fy;
+        let yr = (yf - k.cy) * (1.0 / k.fy);
         let yr2_plus_1 = yr * yr + 1.0;
+        let inv_fx = 1.0 / k.fx;
         let w = c_row.len();
         let mut x = 0;
         while x < w {
             let s = setups[x];
-            let end = run_end(setups, x);
             // (`NO_TRIANGLE` lies past the end of every bin.)
             let Some((&id, sp)) = tile.bin.get(s as usize).zip(tile.planes.get(s as usize)) else {
+                let end = run_end(setups, x);
                 fill_color(&mut c_row[x..end], self.background);
                 d_row[x..end].fill(0.0);
                 if let Some(t) = t_row.get_mut(x..end) {
@@ -207,111 +211,81 @@ impl DeferredPass<'_> {
                 continue;
             };
             // The visibility buffer gets the set-up id in place of the position in the bin.
-            setups[x..end].fill(id);
+            setups[x] = id;
             // The set-up itself only for the optional buffers: the planes hold the rest.
             if !(t_row.is_empty() && b_row.is_empty()) {
                 let st = &tile.chunks[(id >> 16) as usize][(id & 0xffff) as usize];
-                if let Some(t) = t_row.get_mut(x..end) {
-                    t.fill(st.triangle());
+                if let Some(t) = t_row.get_mut(x) {
+                    *t = st.triangle();
                 }
-                if let Some(b) = b_row.get_mut(x..end) {
+                if let Some(b) = b_row.get_mut(x) {
                     // Exactly as the depth renderer computes them.
-                    let rows = st.rows(yf);
-                    for (x, bb) in (x..end).zip(b) {
-                        let (wt, _) = st.corner_weights(&rows, x as f64);
-                        *bb = st.mesh_bary(&wt).map(|v| v as f32);
-                    }
+                    let (wt, _) = st.corner_weights(&st.rows(yf), x as f64);
+                    *b = st.mesh_bary(&wt).map(|v| v as f32);
                 }
             }
-            // The set-up's planes along this row, in `u = x − x₀`.
+            if block.len == LANES {
+                self.flush(block, yr, yr2_plus_1, c_row, d_row);
+            }
+            // Step 7: every plane at this pixel (integers far below 2⁵³, converted exactly);
+            // one division serves depth and every channel.
+            let u = (x as i64 - sp.origin[0] as i64) as f64;
             let v = (y as i64 - sp.origin[1] as i64) as f64;
-            let inverse_depth = sp.inverse_depth.row(v);
-            // (Arrays written out: `[T; N]::map` was left out of line, outside the wide build.)
-            let [n0, n1, n2] = &sp.normal;
-            let normal = [n0.row(v), n1.row(v), n2.row(v)];
-            let [a0, a1, a2] = &sp.albedo;
-            let albedo = [a0.row(v), a1.row(v), a2.row(v)];
-            let u0 = x as i64 - sp.origin[0] as i64;
-            let mut x0 = x;
-            while x0 < end {
-                if block.len + GROUP > LANES {
-                    self.flush(block, yr as f32, yr2_plus_1 as f32, c_row);
-                }
-                // The next (up to) GROUP pixels of the span; lanes past the span's end are
-                // computed and written to the block but not counted.
-                let n = (end - x0).min(GROUP);
-                // Integers far below 2⁵³: one conversion, then exact additions.
-                let (u_first, x_first) = ((u0 + (x0 - x) as i64) as f64, x0 as f64);
-                let us: [f64; GROUP] = std::array::from_fn(|l| u_first + l as f64);
-                let inv_d: [f64; GROUP] = std::array::from_fn(|l| 1.0 / inverse_depth.at(us[l]));
-                let z: [f64; GROUP] = std::array::from_fn(|l| sp.edge_sum * inv_d[l]);
-                let xr: [f64; GROUP] =
-                    std::array::from_fn(|l| (x_first + l as f64 - k.cx) * inv_fx);
-                let value: [f32; GROUP] = std::array::from_fn(|l| {
-                    (match self.kind {
-                        DepthKind::Z => z[l],
-                        DepthKind::Ray => z[l] * (xr[l] * xr[l] + yr2_plus_1).sqrt(),
-                    }) as f32
-                });
-                // Lanes past the span's end go to pixels that later spans overwrite (a
-                // fixed-size copy is one store, a variable one a library call).
-                match d_row.get_mut(x0..x0 + GROUP) {
-                    Some(d) => d.copy_from_slice(&value),
-                    None => d_row[x0..x0 + n].copy_from_slice(&value[..n]),
-                }
-                let lanes = block.len..block.len + GROUP;
-                let surface = &mut block.surface;
-                for (line, out) in normal.iter().zip(&mut surface.normal) {
-                    for (l, out) in out[lanes.clone()].iter_mut().enumerate() {
-                        *out = (line.at(us[l]) * inv_d[l]) as f32;
-                    }
-                }
-                match self.albedo {
-                    Albedo::Texture { .. } => {
-                        for (line, out) in albedo.iter().zip(&mut block.texel) {
-                            for (l, out) in out[lanes.clone()].iter_mut().enumerate() {
-                                *out = line.at(us[l]) * inv_d[l];
-                            }
-                        }
-                    }
-                    Albedo::VertexColors => {
-                        for (line, out) in albedo.iter().zip(&mut surface.albedo) {
-                            for (l, out) in out[lanes.clone()].iter_mut().enumerate() {
-                                *out = (line.at(us[l]) * inv_d[l]) as f32;
-                            }
-                        }
-                    }
-                    Albedo::Constant(color) => {
-                        for (out, value) in surface.albedo.iter_mut().zip(color) {
-                            out[lanes.clone()].fill(value);
-                        }
-                    }
-                }
-                for (l, (column, ray_x)) in block.column[lanes.clone()]
-                    .iter_mut()
-                    .zip(&mut block.ray_x[lanes])
-                    .enumerate()
-                {
-                    *column = (x0 + l) as u32;
-                    *ray_x = xr[l] as f32;
-                }
-                block.len += n;
-                x0 += n;
+            let at = sp.at(u, v);
+            let inv_d = 1.0 / at[0];
+            let z = sp.edge_sum * inv_d;
+            let xr = (x as f64 - k.cx) * inv_fx;
+            let l = block.len;
+            block.column[l] = x as u32;
+            block.ray_x[l] = xr as f32;
+            block.depth[l] = match self.kind {
+                DepthKind::Z => z,
+                DepthKind::Ray => z * (xr * xr + yr2_plus_1).sqrt(),
+            } as f32;
+            let surface = &mut block.surface;
+            for (c, normal) in surface.normal.iter_mut().enumerate() {
+                normal[l] = (at[NORMAL + c] * inv_d) as f32;
             }
-            x = end;
+            match self.albedo {
+                Albedo::Texture { .. } => {
+                    for (c, texel) in block.texel.iter_mut().enumerate() {
+                        texel[l] = at[ALBEDO + c] * inv_d;
+                    }
+                }
+                Albedo::VertexColors => {
+                    for (c, albedo) in surface.albedo.iter_mut().enumerate() {
+                        albedo[l] = (at[ALBEDO + c] * inv_d) as f32;
+                    }
+                }
+                Albedo::Constant(color) => {
+                    for (albedo, value) in surface.albedo.iter_mut().zip(color) {
+                        albedo[l] = value;
+                    }
+                }
+            }
+            block.len += 1;
+            x += 1;
         }
-        self.flush(block, yr as f32, yr2_plus_1 as f32, c_row);
+        self.flush(block, yr, yr2_plus_1, c_row, d_row);
     }
 
-    /// Shades the pixels of `block` into `c_row` and empties it. `yr` and `yr2_plus_1` are the
-    /// row's ray coordinate `y'` and `y'² + 1`.
+    /// Shades the pixels of `block` into `c_row` and `d_row` and empties it. `yr` and
+    /// `yr2_plus_1` are the row's ray coordinate `y'` and `y'² + 1`.
     #[inline(always)]
-    fn flush(&self, block: &mut Block, yr: f32, yr2_plus_1: f32, c_row: &mut [[f32; 3]]) {
-        let m = block.len;
+    fn flush(
+        &self,
+        block: &mut Block,
+        yr: f64,
+        yr2_plus_1: f64,
+        c_row: &mut [[f32; 3]],
+        d_row: &mut [f32],
+    ) {
+        let m = block.len.min(LANES);
         if m == 0 {
             return;
         }
         let s = &mut block.surface;
+        let (yr, yr2_plus_1) = (yr as f32, yr2_plus_1 as f32);
         if let Albedo::Texture { texture, wrap } = self.albedo {
             texture.sample_rgb_lanes(&block.texel, m, wrap, &mut block.taps, &mut s.albedo);
         }
@@ -338,17 +312,23 @@ impl DeferredPass<'_> {
         self.shader.shade_lanes(s, m);
         let [r, g, b] = &s.albedo;
         let first = block.column[0] as usize;
-        match c_row.get_mut(first..first + m) {
+        let contiguous = block.column[m - 1] as usize == first + m - 1;
+        match (
+            c_row.get_mut(first..first + m),
+            d_row.get_mut(first..first + m),
+        ) {
             // Contiguous columns (no background in between, the usual case): one interleaving
-            // copy, which vectorises.
-            Some(out) if block.column[m - 1] as usize == first + m - 1 => {
+            // copy, which vectorises, and one plain copy.
+            (Some(out), Some(depth)) if contiguous => {
                 for (k, out) in out.iter_mut().enumerate() {
                     *out = [r[k], g[k], b[k]];
                 }
+                depth.copy_from_slice(&block.depth[..m]);
             }
             _ => {
                 for (k, &x) in block.column[..m].iter().enumerate() {
                     c_row[x as usize] = [r[k], g[k], b[k]];
+                    d_row[x as usize] = block.depth[k];
                 }
             }
         }

@@ -45,30 +45,6 @@ impl Plane {
             dy: p.dy + q.dy + r.dy,
         }
     }
-
-    /// The function along row `v = y − y₀`: its value at `x = x₀` and its slope.
-    #[inline(always)]
-    pub fn row(&self, v: f64) -> RowLine {
-        RowLine {
-            at_origin: self.c + self.dy * v,
-            dx: self.dx,
-        }
-    }
-}
-
-/// A [`Plane`] restricted to one pixel row: `at_origin + dx · u` with `u = x − x₀`.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct RowLine {
-    at_origin: f64,
-    dx: f64,
-}
-
-impl RowLine {
-    /// The value at `u = x − x₀`.
-    #[inline(always)]
-    pub fn at(&self, u: f64) -> f64 {
-        self.at_origin + self.dx * u
-    }
 }
 
 /// Channels interpolated across a set-up: the camera-space normal (three), then the albedo
@@ -126,23 +102,58 @@ impl VertexChannels {
     }
 }
 
-/// Everything a visible pixel of one set-up needs, as planes: depth, normal and albedo source.
+/// Planes per set-up ([`SetupPlanes`]): `D` (the inverse-depth numerator), the normal's three
+/// channels, the albedo source's three, and a zero pad — eight, so that each coefficient of
+/// all of them is one 512-bit vector.
+pub(crate) const LINES: usize = 8;
+
+/// Index of the first normal plane in [`SetupPlanes`].
+pub(crate) const NORMAL: usize = 1;
+
+/// Index of the first albedo-source plane in [`SetupPlanes`].
+pub(crate) const ALBEDO: usize = 4;
+
+/// Everything a visible pixel of one set-up needs, as planes: depth, normal and albedo source,
+/// stored as structure of arrays (see [`LINES`]) so that a pixel evaluates all of them in a few
+/// vector operations ([`SetupPlanes::at`]).
+///
+/// Plane 0 is `D = Σ q_i`; planes [`NORMAL`].. are the numerators of the camera-space vertex
+/// normal (not normalised); planes [`ALBEDO`].. those of the albedo source: texel-space position
+/// ([`crate::Texture::texel_coords`], first two) for a textured albedo, linear RGB for vertex
+/// colours, zero for a constant.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct SetupPlanes {
     /// `(x₀, y₀)`: the top-left pixel of the set-up's bounding box.
     pub origin: [i32; 2],
     /// `ΣE_i`, so that `z = ΣE / D`.
     pub edge_sum: f64,
-    /// `D = Σ q_i`.
-    pub inverse_depth: Plane,
-    /// Numerators of the camera-space vertex normal (not normalised).
-    pub normal: [Plane; 3],
-    /// Numerators of the albedo source: texel-space position ([`crate::Texture::texel_coords`],
-    /// first two) for a textured albedo, linear RGB for vertex colours, unused for a constant.
-    pub albedo: [Plane; 3],
+    /// Per plane, its value at the origin and its slopes in `x` and `y`.
+    pub c: [f64; LINES],
+    pub dx: [f64; LINES],
+    pub dy: [f64; LINES],
 }
 
 impl SetupPlanes {
+    /// The set-up with origin `origin`, `ΣE = edge_sum` and planes `D`, normal, albedo source.
+    #[inline(always)]
+    fn from_planes(origin: [i32; 2], edge_sum: f64, planes: [Plane; LINES - 1]) -> SetupPlanes {
+        let mut p = SetupPlanes {
+            origin,
+            edge_sum,
+            ..SetupPlanes::default()
+        };
+        for (i, plane) in planes.into_iter().enumerate() {
+            (p.c[i], p.dx[i], p.dy[i]) = (plane.c, plane.dx, plane.dy);
+        }
+        p
+    }
+
+    /// Every plane at the pixel `(u, v) = (x − x₀, y − y₀)`: `(c + dy·v) + dx·u`, lane by lane.
+    #[inline(always)]
+    pub fn at(&self, u: f64, v: f64) -> [f64; LINES] {
+        std::array::from_fn(|i| (self.c[i] + self.dy[i] * v) + self.dx[i] * u)
+    }
+
     /// The planes of the set-ups `bin` (ids `chunk << 16 | index` into `chunks`) into `planes`
     /// (cleared first), in bin order: [`SetupPlanes::new`] of each.
     ///
@@ -225,13 +236,19 @@ impl SetupPlanes {
                 Plane::default()
             }
         };
-        SetupPlanes {
-            origin: st.origin(),
+        SetupPlanes::from_planes(
+            st.origin(),
             edge_sum,
-            inverse_depth: Plane::sum(&q),
-            normal: [channel(0), channel(1), channel(2)],
-            albedo: [albedo(0), albedo(1), albedo(2)],
-        }
+            [
+                Plane::sum(&q),
+                channel(0),
+                channel(1),
+                channel(2),
+                albedo(0),
+                albedo(1),
+                albedo(2),
+            ],
+        )
     }
 
     /// [`SetupPlanes::new`] with each plane in the lanes `(c, dx, dy, 0)` of one AVX register:
@@ -272,13 +289,19 @@ impl SetupPlanes {
                 Plane::default()
             }
         };
-        SetupPlanes {
-            origin: st.origin(),
+        SetupPlanes::from_planes(
+            st.origin(),
             edge_sum,
-            inverse_depth: plane_of_x4(sum_x4(&q)),
-            normal: [channel(0), channel(1), channel(2)],
-            albedo: [albedo(0), albedo(1), albedo(2)],
-        }
+            [
+                plane_of_x4(sum_x4(&q)),
+                channel(0),
+                channel(1),
+                channel(2),
+                albedo(0),
+                albedo(1),
+                albedo(2),
+            ],
+        )
     }
 }
 
@@ -331,10 +354,7 @@ mod tests {
 
     /// Every coefficient of `p`, as bits.
     fn bits(p: &SetupPlanes) -> Vec<u64> {
-        let planes = std::iter::once(&p.inverse_depth)
-            .chain(&p.normal)
-            .chain(&p.albedo);
-        let coefficients = planes.flat_map(|q| [q.c, q.dx, q.dy]);
+        let coefficients = (0..LINES).flat_map(|i| [p.c[i], p.dx[i], p.dy[i]]);
         std::iter::once(p.edge_sum)
             .chain(coefficients)
             .map(f64::to_bits)
@@ -470,16 +490,17 @@ mod tests {
                 let (w, z) = st.corner_weights(&st.rows(y), x);
                 let b = st.mesh_bary(&w);
                 let [u, v] = [x - planes.origin[0] as f64, y - planes.origin[1] as f64];
-                let d = planes.inverse_depth.row(v).at(u);
+                let at = planes.at(u, v);
+                let d = at[0];
                 assert!((planes.edge_sum / d - z).abs() <= 1e-12 * z, "depth");
-                for (c, plane) in planes.normal.iter().enumerate() {
+                for c in 0..3 {
                     let n: f64 = (0..3).map(|j| b[j] * normals[t[j]][c] as f64).sum();
-                    close(plane.row(v).at(u) / d, n, "normal");
+                    close(at[NORMAL + c] / d, n, "normal");
                 }
                 let uv = std::array::from_fn(|c| (0..3).map(|j| b[j] * mesh.uvs[t[j]][c]).sum());
                 let texel = texture.texel_coords(uv);
                 for (c, texel) in texel.into_iter().enumerate() {
-                    close(planes.albedo[c].row(v).at(u) / d, texel, "texel position");
+                    close(at[ALBEDO + c] / d, texel, "texel position");
                 }
             });
         }
