@@ -261,7 +261,7 @@ impl SetupPlanes {
         triangles: &[[u32; 3]],
         channels: &VertexChannels,
     ) -> SetupPlanes {
-        use std::arch::x86_64::__m256d;
+        use std::arch::x86_64::{__m256d, _mm256_setzero_pd, _mm256_storeu_pd};
         let [t0, t1, t2] = triangles[st.triangle() as usize];
         let values = &channels.values;
         let [a0, a1, a2] = [
@@ -281,28 +281,51 @@ impl SetupPlanes {
                 })
             }
         };
-        let channel = |c: usize| plane_of_x4(combine_x4(&vertex, [a0[c], a1[c], a2[c]]));
+        let channel = |c: usize| combine_x4(&vertex, [a0[c], a1[c], a2[c]]);
+        let zero = _mm256_setzero_pd();
         let albedo = |c: usize| {
             if c < channels.albedo_channels {
                 channel(3 + c)
             } else {
-                Plane::default()
+                zero
             }
         };
-        SetupPlanes::from_planes(
-            st.origin(),
+        let mut p = SetupPlanes {
+            origin: st.origin(),
             edge_sum,
-            [
-                plane_of_x4(sum_x4(&q)),
-                channel(0),
-                channel(1),
-                channel(2),
-                albedo(0),
-                albedo(1),
-                albedo(2),
-            ],
-        )
+            ..SetupPlanes::default()
+        };
+        let first = [sum_x4(&q), channel(0), channel(1), channel(2)];
+        let second = [albedo(0), albedo(1), albedo(2), zero];
+        for (at, rows) in [(0, first), (4, second)] {
+            let [c, dx, dy] = transpose_x4(rows);
+            // SAFETY: each store writes the four `f64` at `at..at + 4 ≤ LINES`.
+            unsafe {
+                _mm256_storeu_pd(p.c[at..].as_mut_ptr(), c);
+                _mm256_storeu_pd(p.dx[at..].as_mut_ptr(), dx);
+                _mm256_storeu_pd(p.dy[at..].as_mut_ptr(), dy);
+            }
+        }
+        p
     }
+}
+
+/// The coefficients `c`, `dx`, `dy` of four planes in the lanes `(c, dx, dy, ·)` of `rows`,
+/// each as the four lanes of one register (a 4 × 3 transpose).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx")]
+fn transpose_x4(rows: [std::arch::x86_64::__m256d; 4]) -> [std::arch::x86_64::__m256d; 3] {
+    use std::arch::x86_64::*;
+    let [r0, r1, r2, r3] = rows;
+    // (c0, c1, dy0, dy1), (dx0, dx1, ·, ·), and likewise for planes 2 and 3.
+    let (c_dy01, dx01) = (_mm256_unpacklo_pd(r0, r1), _mm256_unpackhi_pd(r0, r1));
+    let (c_dy23, dx23) = (_mm256_unpacklo_pd(r2, r3), _mm256_unpackhi_pd(r2, r3));
+    [
+        _mm256_permute2f128_pd::<0x20>(c_dy01, c_dy23),
+        _mm256_permute2f128_pd::<0x20>(dx01, dx23),
+        _mm256_permute2f128_pd::<0x31>(c_dy01, c_dy23),
+    ]
 }
 
 /// [`Plane::combine`] on planes in the lanes `(c, dx, dy, 0)`.
@@ -327,21 +350,6 @@ fn sum_x4(planes: &[std::arch::x86_64::__m256d; 3]) -> std::arch::x86_64::__m256
     use std::arch::x86_64::_mm256_add_pd;
     let [p, q, r] = planes;
     _mm256_add_pd(_mm256_add_pd(*p, *q), *r)
-}
-
-/// The [`Plane`] in the lanes `(c, dx, dy, ·)`.
-#[cfg(target_arch = "x86_64")]
-#[inline]
-#[target_feature(enable = "avx")]
-fn plane_of_x4(lanes: std::arch::x86_64::__m256d) -> Plane {
-    let mut l = [0.0; 4];
-    // SAFETY: `l` holds four `f64`, what an unaligned 256-bit store writes.
-    unsafe { std::arch::x86_64::_mm256_storeu_pd(l.as_mut_ptr(), lanes) };
-    Plane {
-        c: l[0],
-        dx: l[1],
-        dy: l[2],
-    }
 }
 
 #[cfg(test)]
