@@ -15,7 +15,7 @@
 use visage_camera::{DepthKind, Intrinsics};
 
 use crate::frame::Albedo;
-use crate::interpolation::{SetupPlanes, ALBEDO, NORMAL};
+use crate::interpolation::{SetupPlanes, ALBEDO, LINES, NORMAL};
 use crate::rasterize::{ScreenTriangle, NO_TRIANGLE};
 use crate::shading::{BlinnPhong, SurfaceLanes, LANES};
 use crate::simd::with_simd;
@@ -85,6 +85,10 @@ pub(crate) struct Block {
     len: usize,
     /// Their columns.
     column: [u32; LANES],
+    /// Their set-up's `ΣE` and their values of its planes ([`SetupPlanes::at`]): `D`, then
+    /// the numerators of the normal and of the albedo source. Divided at flush.
+    edge_sum: [f64; LANES],
+    planes: [[f64; LANES]; LINES - 1],
     /// Their depth-buffer values.
     depth: [f32; LANES],
     /// Their ray coordinate `x' = (u − c_x)/f_x`.
@@ -102,6 +106,8 @@ impl Default for Block {
         Block {
             len: 0,
             column: [0; LANES],
+            edge_sum: [0.0; LANES],
+            planes: [[0.0; LANES]; LINES - 1],
             depth: [0.0; LANES],
             ray_x: [0.0; LANES],
             texel: [[0.0; LANES]; 2],
@@ -191,7 +197,6 @@ impl DeferredPass<'_> {
         let yf = y as f64;
         let yr = (yf - k.cy) * (1.0 / k.fy);
         let yr2_plus_1 = yr * yr + 1.0;
-        let inv_fx = 1.0 / k.fx;
         let w = c_row.len();
         let mut x = 0;
         while x < w {
@@ -227,46 +232,83 @@ impl DeferredPass<'_> {
             if block.len == LANES {
                 self.flush(block, yr, yr2_plus_1, c_row, d_row);
             }
-            // Step 7: every plane at this pixel (integers far below 2⁵³, converted exactly);
-            // one division serves depth and every channel.
+            // Step 7: every plane at this pixel (integers far below 2⁵³, converted exactly),
+            // divided at flush, lane-parallel (one division per pixel, and square roots only
+            // for ray depth, were the bottleneck here).
             let u = (x as i64 - sp.origin[0] as i64) as f64;
             let v = (y as i64 - sp.origin[1] as i64) as f64;
             let at = sp.at(u, v);
-            let inv_d = 1.0 / at[0];
-            let z = sp.edge_sum * inv_d;
-            let xr = (x as f64 - k.cx) * inv_fx;
             let l = block.len;
             block.column[l] = x as u32;
-            block.ray_x[l] = xr as f32;
-            block.depth[l] = match self.kind {
-                DepthKind::Z => z,
-                DepthKind::Ray => z * (xr * xr + yr2_plus_1).sqrt(),
-            } as f32;
-            let surface = &mut block.surface;
-            for (c, normal) in surface.normal.iter_mut().enumerate() {
-                normal[l] = (at[NORMAL + c] * inv_d) as f32;
-            }
-            match self.albedo {
-                Albedo::Texture { .. } => {
-                    for (c, texel) in block.texel.iter_mut().enumerate() {
-                        texel[l] = at[ALBEDO + c] * inv_d;
-                    }
-                }
-                Albedo::VertexColors => {
-                    for (c, albedo) in surface.albedo.iter_mut().enumerate() {
-                        albedo[l] = (at[ALBEDO + c] * inv_d) as f32;
-                    }
-                }
-                Albedo::Constant(color) => {
-                    for (albedo, value) in surface.albedo.iter_mut().zip(color) {
-                        albedo[l] = value;
-                    }
-                }
+            block.edge_sum[l] = sp.edge_sum;
+            for (plane, value) in block.planes.iter_mut().zip(at) {
+                plane[l] = value;
             }
             block.len += 1;
             x += 1;
         }
         self.flush(block, yr, yr2_plus_1, c_row, d_row);
+    }
+
+    /// Step 7's divisions for the first `m` pixels of `block`: depth-buffer value, ray
+    /// coordinate, normal (not yet normalised) and albedo source from `ΣE` and the planes'
+    /// values (`z = ΣE / D`, attribute `= numerator / D`). `yr2_plus_1` is the row's `y'² + 1`.
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // `l` indexes several lane arrays
+    fn divide(&self, block: &mut Block, m: usize, yr2_plus_1: f64) {
+        let m = m.min(LANES);
+        let k = &self.intrinsics;
+        let inv_fx = 1.0 / k.fx;
+        let planes = &block.planes;
+        let mut inv_d = [0.0; LANES];
+        let mut z = [0.0; LANES];
+        let mut xr = [0.0; LANES];
+        for l in 0..m {
+            inv_d[l] = 1.0 / planes[0][l];
+            z[l] = block.edge_sum[l] * inv_d[l];
+            xr[l] = (block.column[l] as f64 - k.cx) * inv_fx;
+            block.ray_x[l] = xr[l] as f32;
+        }
+        // One loop per depth kind: the square root only where it is needed.
+        match self.kind {
+            DepthKind::Z => {
+                for l in 0..m {
+                    block.depth[l] = z[l] as f32;
+                }
+            }
+            DepthKind::Ray => {
+                for l in 0..m {
+                    block.depth[l] = (z[l] * (xr[l] * xr[l] + yr2_plus_1).sqrt()) as f32;
+                }
+            }
+        }
+        let s = &mut block.surface;
+        for (c, normal) in s.normal.iter_mut().enumerate() {
+            for l in 0..m {
+                normal[l] = (planes[NORMAL + c][l] * inv_d[l]) as f32;
+            }
+        }
+        match self.albedo {
+            Albedo::Texture { .. } => {
+                for (c, texel) in block.texel.iter_mut().enumerate() {
+                    for l in 0..m {
+                        texel[l] = planes[ALBEDO + c][l] * inv_d[l];
+                    }
+                }
+            }
+            Albedo::VertexColors => {
+                for (c, albedo) in s.albedo.iter_mut().enumerate() {
+                    for l in 0..m {
+                        albedo[l] = (planes[ALBEDO + c][l] * inv_d[l]) as f32;
+                    }
+                }
+            }
+            Albedo::Constant(color) => {
+                for (albedo, value) in s.albedo.iter_mut().zip(color) {
+                    albedo[..m].fill(value);
+                }
+            }
+        }
     }
 
     /// Shades the pixels of `block` into `c_row` and `d_row` and empties it. `yr` and
@@ -284,6 +326,7 @@ impl DeferredPass<'_> {
         if m == 0 {
             return;
         }
+        self.divide(block, m, yr2_plus_1);
         let s = &mut block.surface;
         let (yr, yr2_plus_1) = (yr as f32, yr2_plus_1 as f32);
         if let Albedo::Texture { texture, wrap } = self.albedo {
