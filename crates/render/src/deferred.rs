@@ -85,10 +85,11 @@ pub(crate) struct Block {
     len: usize,
     /// Their columns.
     column: [u32; LANES],
-    /// Their set-up's `ΣE` and their values of its planes ([`SetupPlanes::at`]): `D`, then
-    /// the numerators of the normal and of the albedo source. Divided at flush.
+    /// Their set-up's `ΣE` and their values of its planes ([`SetupPlanes::at`]: `D`, then the
+    /// numerators of the normal and of the albedo source), divided at flush. All planes of a
+    /// pixel side by side: one vector store, and the evaluation vectorises.
     edge_sum: [f64; LANES],
-    planes: [[f64; LANES]; LINES - 1],
+    planes: [[f64; LINES]; LANES],
     /// Their depth-buffer values.
     depth: [f32; LANES],
     /// Their ray coordinate `x' = (u − c_x)/f_x`.
@@ -107,7 +108,7 @@ impl Default for Block {
             len: 0,
             column: [0; LANES],
             edge_sum: [0.0; LANES],
-            planes: [[0.0; LANES]; LINES - 1],
+            planes: [[0.0; LINES]; LANES],
             depth: [0.0; LANES],
             ray_x: [0.0; LANES],
             texel: [[0.0; LANES]; 2],
@@ -241,9 +242,7 @@ impl DeferredPass<'_> {
             let l = block.len;
             block.column[l] = x as u32;
             block.edge_sum[l] = sp.edge_sum;
-            for (plane, value) in block.planes.iter_mut().zip(at) {
-                plane[l] = value;
-            }
+            block.planes[l] = at;
             block.len += 1;
             x += 1;
         }
@@ -264,7 +263,7 @@ impl DeferredPass<'_> {
         let mut z = [0.0; LANES];
         let mut xr = [0.0; LANES];
         for l in 0..m {
-            inv_d[l] = 1.0 / planes[0][l];
+            inv_d[l] = 1.0 / planes[l][0];
             z[l] = block.edge_sum[l] * inv_d[l];
             xr[l] = (block.column[l] as f64 - k.cx) * inv_fx;
             block.ray_x[l] = xr[l] as f32;
@@ -285,21 +284,21 @@ impl DeferredPass<'_> {
         let s = &mut block.surface;
         for (c, normal) in s.normal.iter_mut().enumerate() {
             for l in 0..m {
-                normal[l] = (planes[NORMAL + c][l] * inv_d[l]) as f32;
+                normal[l] = (planes[l][NORMAL + c] * inv_d[l]) as f32;
             }
         }
         match self.albedo {
             Albedo::Texture { .. } => {
                 for (c, texel) in block.texel.iter_mut().enumerate() {
                     for l in 0..m {
-                        texel[l] = planes[ALBEDO + c][l] * inv_d[l];
+                        texel[l] = planes[l][ALBEDO + c] * inv_d[l];
                     }
                 }
             }
             Albedo::VertexColors => {
                 for (c, albedo) in s.albedo.iter_mut().enumerate() {
                     for l in 0..m {
-                        albedo[l] = (planes[ALBEDO + c][l] * inv_d[l]) as f32;
+                        albedo[l] = (planes[l][ALBEDO + c] * inv_d[l]) as f32;
                     }
                 }
             }
