@@ -19,15 +19,16 @@ use crate::interpolation::{SetupPlanes, ALBEDO, LINES, NORMAL};
 use crate::rasterize::{ScreenTriangle, NO_TRIANGLE};
 use crate::shading::{BlinnPhong, SurfaceLanes, LANES};
 use crate::simd::with_simd;
+use crate::stream;
 use crate::texture::TapLanes;
 
 /// Sets every pixel of `pixels` to `color`; a grey (black, the default background) is one
-/// `f32` fill, which compiles to wide stores instead of 12-byte ones.
+/// streaming `f32` fill ([`stream::fill`]) instead of 12-byte stores.
 #[inline(always)]
 fn fill_color(pixels: &mut [[f32; 3]], color: [f32; 3]) {
     let [r, g, b] = color.map(f32::to_bits);
     if r == g && g == b {
-        pixels.as_flattened_mut().fill(color[0]);
+        stream::fill(pixels.as_flattened_mut(), color[0]);
     } else {
         pixels.fill(color);
     }
@@ -175,6 +176,8 @@ impl DeferredPass<'_> {
             };
             self.shade_row(block, row0 + r, &tile, setups, row);
         }
+        // The background's streaming stores reach memory before the tile is handed back.
+        stream::fence();
     }
 
     /// Shades row `y` whose visibility buffer row is `setups` into `row` (one image row; the
@@ -206,7 +209,7 @@ impl DeferredPass<'_> {
             let Some((&id, sp)) = tile.bin.get(s as usize).zip(tile.planes.get(s as usize)) else {
                 let end = run_end(setups, x);
                 fill_color(&mut c_row[x..end], self.background);
-                d_row[x..end].fill(0.0);
+                stream::fill(&mut d_row[x..end], 0.0);
                 if let Some(t) = t_row.get_mut(x..end) {
                     t.fill(NO_TRIANGLE);
                 }

@@ -72,6 +72,7 @@ pub mod projective;
 pub mod rasterize;
 pub mod shading;
 mod simd;
+mod stream;
 pub mod texture;
 pub mod turntable;
 mod validate;
