@@ -4,7 +4,8 @@
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::{
-    __m256d, _mm256_cmp_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_sub_pd, _CMP_GE_OQ,
+    __m256d, __m512d, __mmask8, _mm256_cmp_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_sub_pd,
+    _mm512_mask_cmp_pd_mask, _mm512_mul_pd, _mm512_set1_pd, _mm512_sub_pd, _CMP_GE_OQ,
 };
 
 /// An oriented triangle edge `a → b` in pixel coordinates, stored canonically.
@@ -106,6 +107,47 @@ impl Edge {
     #[target_feature(enable = "avx")]
     pub(crate) fn inside_x4(&self, e: __m256d) -> __m256d {
         _mm256_cmp_pd::<_CMP_GE_OQ>(e, _mm256_set1_pd(self.min_inside))
+    }
+}
+
+/// Eight-lane twins of [`Edge::row`], [`Edge::eval`] and [`Edge::inside`] for eight rows or
+/// eight pixel centres of one row (AVX-512), with the evaluation split into its row and column
+/// parts so that a scan computes each once per row and per column: lane by lane the same
+/// operations in the same order, so the same bits.
+#[cfg(target_arch = "x86_64")]
+impl Edge {
+    /// [`Edge::row`] at the rows `y`.
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    pub(crate) fn row_x8(&self, y: __m512d) -> __m512d {
+        _mm512_mul_pd(
+            _mm512_set1_pd(self.d[0]),
+            _mm512_sub_pd(y, _mm512_set1_pd(self.a[1])),
+        )
+    }
+
+    /// The part of `E` that depends on the column only, `d_y · (x − a_x)`, at the centres `x`.
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    pub(crate) fn column_x8(&self, x: __m512d) -> __m512d {
+        let t = _mm512_sub_pd(x, _mm512_set1_pd(self.a[0]));
+        _mm512_mul_pd(_mm512_set1_pd(self.d[1]), t)
+    }
+
+    /// `E` at the centres of one row given `row = self.row(y)` in every lane and
+    /// `column = self.column_x8(x)`.
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    pub(crate) fn eval_x8(&self, row: __m512d, column: __m512d) -> __m512d {
+        _mm512_mul_pd(_mm512_set1_pd(self.sign), _mm512_sub_pd(row, column))
+    }
+
+    /// The lanes of `lanes` whose value `e = E(p)` puts `p` inside (`e ≥ min_inside`, an
+    /// ordered comparison: false for NaN).
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    pub(crate) fn inside_x8(&self, lanes: __mmask8, e: __m512d) -> __mmask8 {
+        _mm512_mask_cmp_pd_mask::<_CMP_GE_OQ>(lanes, e, _mm512_set1_pd(self.min_inside))
     }
 }
 

@@ -475,9 +475,10 @@ pub(crate) fn positions_to_ids(bin: &[u32], index: &mut [u32]) {
 /// `depth` and `index` hold whole image rows of `width` pixels from row `row0` on; `index`
 /// receives positions in `bin`.
 ///
-/// On x86-64 CPUs with AVX2 this runs [`scan_avx2`] (four pixels at a time), chosen at run time;
-/// it performs lane by lane the operations of [`scan`] and Rust never fuses or reorders
-/// floating-point operations, so coverage and depth are identical.
+/// On x86-64 CPUs with AVX-512 this runs [`scan_avx512`] (eight pixels at a time), else on those
+/// with AVX2 [`scan_avx2`] (four), chosen at run time; both perform lane by lane the operations
+/// of [`scan`] and Rust never fuses or reorders floating-point operations, so coverage and depth
+/// are identical.
 fn scan_tile(
     chunks: &[Vec<ScreenTriangle>],
     bin: &[u32],
@@ -487,12 +488,41 @@ fn scan_tile(
     index: &mut [u32],
 ) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2 (checked just above).
-        unsafe { scan_tile_avx2(chunks, bin, row0, width, depth, index) };
-        return;
+    {
+        use std::arch::is_x86_feature_detected as has;
+        if has!("avx512f") && has!("avx512vl") {
+            // SAFETY: the CPU supports AVX-512 F and VL (checked just above).
+            unsafe { scan_tile_avx512(chunks, bin, row0, width, depth, index) };
+            return;
+        }
+        if has!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            unsafe { scan_tile_avx2(chunks, bin, row0, width, depth, index) };
+            return;
+        }
     }
     scan_tile_scalar(chunks, bin, row0, width, depth, index);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl")]
+fn scan_tile_avx512(
+    chunks: &[Vec<ScreenTriangle>],
+    bin: &[u32],
+    row0: i32,
+    width: usize,
+    depth: &mut [f32],
+    index: &mut [u32],
+) {
+    for_each_setup(
+        chunks,
+        bin,
+        row0,
+        width,
+        depth,
+        index,
+        |st, s, y0, y1, depth, index| scan_avx512(st, s, y0, y1, row0, width, depth, index),
+    );
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -653,6 +683,91 @@ fn scan_avx2(
                 break;
             }
             x = _mm256_add_pd(x, step);
+        }
+    }
+}
+
+/// [`scan_avx2`] eight pixel centres of a row at a time, with mask registers: the lanes outside
+/// the bounding box, the coverage and the depth test are bit masks, and the depth buffer is read
+/// and written with masked loads and stores.
+///
+/// The row-dependent part of the edge functions ([`Edge::row`]) is computed once per row, eight
+/// rows at a time, and the column-dependent part ([`Edge::column_x8`]) once per column of the
+/// bounding box, by scanning the box in columns of eight pixels, each top to bottom: for the
+/// small triangles of a face mesh (boxes at most 8 wide, one column) a row then costs one
+/// subtraction and one multiplication per edge before the depth of Step 6. Each pixel is tested
+/// at most once per set-up, so the order within a set-up does not change the z-buffer.
+///
+/// Lane by lane the operations of [`scan`] and of the depth test of [`scan_tile_scalar`], so
+/// coverage, depths and tie-breaking are bit-identical. `y0..=y1` are at most [`TILE_ROWS`] rows.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl")]
+#[allow(clippy::too_many_arguments)]
+fn scan_avx512(
+    st: &ScreenTriangle,
+    s: u32,
+    y0: i32,
+    y1: i32,
+    row0: i32,
+    width: usize,
+    depth: &mut [f32],
+    index: &mut [u32],
+) {
+    use std::arch::x86_64::*;
+    // The rows of a tile are computed eight at a time.
+    const _: () = assert!(TILE_ROWS.is_multiple_of(8));
+    let [e0, e1, e2] = &st.edges;
+    let [w0, w1, w2] = st.inv_w.map(|w| _mm512_set1_pd(w));
+    let id = _mm256_set1_epi32(s as i32);
+    // Pixel coordinates are integers far below 2⁵³: `y0 + l` and `x0 + o + l` are exact.
+    let lanes = _mm512_setr_pd(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0);
+    // `rows[i][j]`: the row part of `E_i` (`Edge::row`) at row `y0 + j`.
+    let n_rows = (y1 - y0 + 1) as usize;
+    let mut rows = [[0.0; TILE_ROWS]; 3];
+    for h in (0..n_rows).step_by(8) {
+        let y = _mm512_add_pd(_mm512_set1_pd((y0 + h as i32) as f64), lanes);
+        for (e, rows) in [e0, e1, e2].into_iter().zip(&mut rows) {
+            let rows = &mut rows[h..h + 8];
+            // SAFETY: `rows` holds eight `f64`.
+            unsafe { _mm512_storeu_pd(rows.as_mut_ptr(), e.row_x8(y)) };
+        }
+    }
+    let (r0, r1, r2) = (&rows[0][..n_rows], &rows[1][..n_rows], &rows[2][..n_rows]);
+    // The bounding box is clamped to the image, so `0 ≤ x0 ≤ x1 < width`.
+    let n = (st.x1 - st.x0) as usize + 1;
+    for o in (0..n).step_by(8) {
+        let x = _mm512_add_pd(_mm512_set1_pd((st.x0 as usize + o) as f64), lanes);
+        let (c0, c1, c2) = (e0.column_x8(x), e1.column_x8(x), e2.column_x8(x));
+        // The column's pixels in the bounding box: the first `m` lanes of rows `y0..=y1`.
+        let m = (n - o).min(8);
+        let in_box = (0xff_u32 >> (8 - m)) as __mmask8;
+        let first = (y0 - row0) as usize * width + st.x0 as usize + o;
+        let last = first + (n_rows - 1) * width + m;
+        let (depth, index) = (&mut depth[first..last], &mut index[first..last]);
+        for (j, ((&r0, &r1), &r2)) in r0.iter().zip(r1).zip(r2).enumerate() {
+            let (r0, r1, r2) = (_mm512_set1_pd(r0), _mm512_set1_pd(r1), _mm512_set1_pd(r2));
+            let (a, b, c) = (e0.eval_x8(r0, c0), e1.eval_x8(r1, c1), e2.eval_x8(r2, c2));
+            let covered = e2.inside_x8(e1.inside_x8(e0.inside_x8(in_box, a), b), c);
+            if covered == 0 {
+                continue;
+            }
+            let sum = _mm512_add_pd(_mm512_add_pd(a, b), c);
+            let q = _mm512_add_pd(
+                _mm512_add_pd(_mm512_mul_pd(a, w0), _mm512_mul_pd(b, w1)),
+                _mm512_mul_pd(c, w2),
+            );
+            // Rounded to nearest like `as f32` (Rust keeps the default rounding mode).
+            let z = _mm512_cvtpd_ps(_mm512_div_pd(sum, q));
+            // SAFETY: the masked loads and stores touch only covered lanes `l`, which are in the
+            // box (`l < m`), so `j · width + l < depth.len() = index.len()`.
+            unsafe {
+                let (d, i) = (depth.as_mut_ptr(), index.as_mut_ptr());
+                let (d, i) = (d.add(j * width), i.add(j * width));
+                let old = _mm256_maskz_loadu_ps(covered, d);
+                let nearer = _mm256_mask_cmp_ps_mask::<_CMP_LT_OQ>(covered, z, old);
+                _mm256_mask_storeu_ps(d, nearer, z);
+                _mm256_mask_storeu_epi32(i.cast(), nearer, id);
+            }
         }
     }
 }
@@ -1022,8 +1137,11 @@ mod tests {
         }
     }
 
+    /// The tile scan through `scan_tile` (one of the builds below, chosen at run time), through
+    /// each vector build the CPU has, and one pixel at a time gives the same visibility buffer
+    /// and tile depths, bit for bit.
     #[test]
-    fn avx2_scan_matches_the_scalar_scan_bit_for_bit() {
+    fn vector_scans_match_the_scalar_scan_bit_for_bit() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         let (positions, triangles) = soup(&mut rng);
         // Odd width and a partial last tile exercise the ends of spans and of the buffer.
@@ -1040,27 +1158,59 @@ mod tests {
         .unwrap();
         let width = k.width as usize;
         let n_pixels = width * k.height as usize;
-        let (mut depth, mut index) = (vec![0.0; n_pixels], vec![0; n_pixels]);
-        let (mut depth_scalar, mut index_scalar) = (vec![0.0; n_pixels], vec![0; n_pixels]);
-        let tiles = depth
-            .chunks_mut(TILE_ROWS * width)
-            .zip(index.chunks_mut(TILE_ROWS * width))
-            .zip(depth_scalar.chunks_mut(TILE_ROWS * width))
-            .zip(index_scalar.chunks_mut(TILE_ROWS * width));
-        for (t, (((d, i), ds), is)) in tiles.enumerate() {
-            let (bin, row0) = (&r.bins[t], (t * TILE_ROWS) as i32);
-            scan_tile(&r.setup_chunks, bin, row0, width, d, i);
-            scan_tile_scalar(&r.setup_chunks, bin, row0, width, ds, is);
-        }
-        let covered = index.iter().filter(|&&s| s != NO_TRIANGLE).count();
+        type ScanTile = fn(&[Vec<ScreenTriangle>], &[u32], i32, usize, &mut [f32], &mut [u32]);
+        // The visibility buffer and depths of a frame scanned tile by tile by `scan`.
+        let scan_frame = |scan: ScanTile| {
+            let (mut depth, mut index) = (vec![0.0; n_pixels], vec![0; n_pixels]);
+            let tiles = depth
+                .chunks_mut(TILE_ROWS * width)
+                .zip(index.chunks_mut(TILE_ROWS * width));
+            for (t, (d, i)) in tiles.enumerate() {
+                scan(
+                    &r.setup_chunks,
+                    &r.bins[t],
+                    (t * TILE_ROWS) as i32,
+                    width,
+                    d,
+                    i,
+                );
+            }
+            (depth, index)
+        };
+        let (depth_scalar, index_scalar) = scan_frame(scan_tile_scalar);
+        let covered = index_scalar.iter().filter(|&&s| s != NO_TRIANGLE).count();
         assert!(covered > n_pixels / 2, "{covered} of {n_pixels} covered");
-        for p in 0..n_pixels {
-            assert_eq!(index[p], index_scalar[p], "set-up at pixel {p}");
-            assert_eq!(
-                depth[p].to_bits(),
-                depth_scalar[p].to_bits(),
-                "depth at pixel {p}"
-            );
+        let mut builds: Vec<(&str, ScanTile)> = vec![("dispatched", scan_tile)];
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            if has!("avx2") {
+                // SAFETY: the CPU supports AVX2 (checked just above).
+                builds.push(("AVX2", |c, b, r, w, d, i| unsafe {
+                    scan_tile_avx2(c, b, r, w, d, i)
+                }));
+            } else {
+                eprintln!("AVX2 scan not checked: the CPU lacks AVX2");
+            }
+            if has!("avx512f") && has!("avx512vl") {
+                // SAFETY: the CPU supports AVX-512 F and VL (checked just above).
+                builds.push(("AVX-512", |c, b, r, w, d, i| unsafe {
+                    scan_tile_avx512(c, b, r, w, d, i)
+                }));
+            } else {
+                eprintln!("AVX-512 scan not checked: the CPU lacks AVX-512 F or VL");
+            }
+        }
+        for (name, scan) in builds {
+            let (depth, index) = scan_frame(scan);
+            for p in 0..n_pixels {
+                assert_eq!(index[p], index_scalar[p], "{name}: set-up at pixel {p}");
+                assert_eq!(
+                    depth[p].to_bits(),
+                    depth_scalar[p].to_bits(),
+                    "{name}: depth at pixel {p}"
+                );
+            }
         }
     }
 }
