@@ -30,8 +30,8 @@
 //! - **Parallelism**: every per-vertex and per-triangle pass (validation, transforms, normals,
 //!   set-up, binning) and scan conversion run on rayon's pool; scan conversion is split into
 //!   tiles of [`TILE_ROWS`] image rows, each owning its part of the z-buffer. These passes, the
-//!   interpolation planes, the tile scan and the shading pass also have AVX2 builds chosen at run
-//!   time, with identical results (no float contraction or reordering).
+//!   interpolation planes, the tile scan and the shading pass also have AVX-512 and AVX2 builds
+//!   chosen at run time, with identical results (no float contraction or reordering).
 //!
 //! # Decisions where the paper, the ERRATA and issue 4 are silent
 //! - `P` carries `(2cx + 1)/W` instead of ERRATA 12's `2cx/W` because pixel centres sit at

@@ -299,9 +299,9 @@ impl Texture {
     ) {
         let m = m.min(LANES);
         // One loop per wrap mode, so that each is branch-free (plain loops: a closure here was
-        // compiled out of line, without the caller's AVX2); the clamped one is lane-parallel.
-        // `k < m ≤ LANES` is visible to the compiler here, so the lane stores need no bounds
-        // checks and the clamped loop vectorises.
+        // compiled out of line, without the caller's wide vectors); the clamped one is
+        // lane-parallel. `k < m ≤ LANES` is visible to the compiler here, so the lane stores
+        // need no bounds checks and the clamped loop vectorises.
         match wrap {
             Wrap::Clamp => {
                 for k in 0..m {
