@@ -63,6 +63,13 @@ pub(crate) struct VertexChannels {
 }
 
 impl VertexChannels {
+    /// The channel values of the three vertices of `triangle` (indices must be valid: meshes
+    /// are validated before rasterisation).
+    #[inline(always)]
+    fn of_triangle(&self, triangle: [u32; 3]) -> [&[f64; CHANNELS]; 3] {
+        triangle.map(|v| &self.values[v as usize])
+    }
+
     /// Fills the table for the vertices of `mesh` with camera-space normals `normal(v)` and the
     /// albedo source `albedo` (whose attribute the mesh must have). In parallel over vertices.
     pub(crate) fn fill(
@@ -203,13 +210,7 @@ impl SetupPlanes {
         triangles: &[[u32; 3]],
         channels: &VertexChannels,
     ) -> SetupPlanes {
-        let [t0, t1, t2] = triangles[st.triangle() as usize];
-        let values = &channels.values;
-        let [a0, a1, a2] = [
-            &values[t0 as usize],
-            &values[t1 as usize],
-            &values[t2 as usize],
-        ];
+        let [a0, a1, a2] = channels.of_triangle(triangles[st.triangle() as usize]);
         let (q, edge_sum) = st.perspective_planes();
         // Corner `i` of the set-up is the point `Σ_j B_ij v_j` of the mesh triangle, so
         // `Σ_i a_i q_i = Σ_j A_j Σ_i B_ij q_i`: one plane per mesh vertex `j`, then one
@@ -262,13 +263,7 @@ impl SetupPlanes {
         channels: &VertexChannels,
     ) -> SetupPlanes {
         use std::arch::x86_64::{__m256d, _mm256_setzero_pd, _mm256_storeu_pd};
-        let [t0, t1, t2] = triangles[st.triangle() as usize];
-        let values = &channels.values;
-        let [a0, a1, a2] = [
-            &values[t0 as usize],
-            &values[t1 as usize],
-            &values[t2 as usize],
-        ];
+        let [a0, a1, a2] = channels.of_triangle(triangles[st.triangle() as usize]);
         let (q, edge_sum) = st.perspective_planes_x4();
         let vertex: [__m256d; 3] = match st.vertex_corners() {
             Some([0, 1, 2]) => q,
