@@ -314,13 +314,13 @@ impl Texture {
                 }
             }
         }
-        // Every lane's two texel rows start loading before the first is read.
+        // Every lane's two texel rows start loading before the first is read. (Unchecked
+        // addresses: a prefetch never faults, and a bounds check per tap cost 3 % of a frame.)
+        let texels = self.texels.as_ptr();
         for k in 0..m {
             let first = taps.index[k] as usize;
             for index in [first, first.wrapping_add(taps.next_row[k] as usize)] {
-                if let Some(texel) = self.texels.get(index) {
-                    prefetch(texel);
-                }
+                prefetch(texels.wrapping_add(index));
             }
         }
         let [r, g, b] = out;
