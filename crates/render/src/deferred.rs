@@ -3,9 +3,10 @@
 //!
 //! A row is walked pixel by pixel: a visible pixel evaluates all its set-up's planes
 //! ([`crate::interpolation`]) in a few vector operations and joins a block of [`LANES`] pixels;
-//! the block then divides (once per pixel for depth and every channel), samples the texture and
-//! computes the view vector, normalisation, two-sided flip and Blinn–Phong in branch-free
-//! lane-parallel loops. Background runs are skipped whole and written with streaming stores.
+//! the block then transposes its planes to lanes, divides (once per pixel for depth and every
+//! channel), samples the texture and computes the view vector, normalisation, two-sided flip and
+//! Blinn–Phong in branch-free lane-parallel loops. Background runs are skipped whole and written
+//! with streaming stores.
 //!
 //! Walking spans of equal set-up instead (the planes evaluated along the row, four pixels at a
 //! time) cost ~200 instructions per span and a mispredicted loop exit or two, for spans of 2–3
