@@ -103,7 +103,7 @@ fn transpose_avx512(
     lanes: &mut [[f64; LANES]; LINES],
 ) {
     use std::arch::x86_64::*;
-    const _: () = assert!(LINES == 8 && LANES % 8 == 0);
+    const _: () = assert!(LINES == 8 && LANES.is_multiple_of(8));
     let pick_low = _mm512_setr_epi64(0, 1, 8, 9, 4, 5, 12, 13);
     let pick_high = _mm512_setr_epi64(2, 3, 10, 11, 6, 7, 14, 15);
     for g in 0..groups.min(LANES / 8) {
