@@ -3,6 +3,8 @@
 //!
 //! The mesh is a bumpy, face-like height field (124 × 123 vertices, 30 012 triangles) seen from
 //! 0.5 m, covering about half of the frame; texture 1024², default material and light.
+//! Each benchmark reports how much CPU time the host's hypervisor took while it ran (steal): on
+//! a shared virtual machine, a figure measured under steal is not the machine's own speed.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use visage_camera::{DepthKind, Intrinsics};
@@ -12,6 +14,8 @@ use visage_render::{
 
 #[path = "common/scene.rs"]
 mod scene;
+#[path = "common/steal.rs"]
+mod steal;
 
 use scene::{face_like_mesh, texture};
 
@@ -43,6 +47,7 @@ fn bench(c: &mut Criterion) {
     );
     // Headline: colour + depth images (what `visage render` writes).
     let mut images = Frame::color_and_depth(k.width, k.height, DepthKind::Z);
+    let mut c = steal::Reporting(c);
     c.bench_function("textured_shaded_1280x720_30k_tris", |b| {
         b.iter(|| {
             renderer
