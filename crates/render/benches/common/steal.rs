@@ -33,7 +33,9 @@ impl Reporting<'_> {
                 "{id}: host CPU steal while it ran: {:.1}% of this machine's CPU time",
                 100.0 * (s1 - s0) as f64 / (t1 - t0) as f64
             ),
-            _ => eprintln!("{id}: host CPU steal not available on this system"),
+            // Filtered out: it did not run.
+            Some(_) => {}
+            None => eprintln!("{id}: host CPU steal not available on this system"),
         }
         self
     }
