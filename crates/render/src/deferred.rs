@@ -3,10 +3,9 @@
 //!
 //! A row is walked pixel by pixel: a visible pixel evaluates all its set-up's planes
 //! ([`crate::interpolation`]) in a few vector operations and joins a block of [`LANES`] pixels;
-//! the block then transposes its planes to lanes, divides (once per pixel for depth and every
-//! channel), samples the texture and computes the view vector, normalisation, two-sided flip and
-//! Blinn–Phong in branch-free lane-parallel loops. Background runs are skipped whole and written
-//! with streaming stores.
+//! the block then divides (once per pixel for depth and every channel), samples the texture and
+//! computes the view vector, normalisation, two-sided flip and Blinn–Phong in branch-free
+//! lane-parallel loops. Background runs are skipped whole and written with streaming stores.
 //!
 //! Walking spans of equal set-up instead (the planes evaluated along the row, four pixels at a
 //! time) cost ~200 instructions per span and a mispredicted loop exit or two, for spans of 2–3
@@ -61,92 +60,6 @@ fn run_end(row: &[u32], start: usize) -> usize {
     end + row[end..].iter().take_while(|&&t| t == s).count()
 }
 
-/// The first `m` pixels' planes (`planes[lane][plane]`) into `lanes` (`[plane][lane]`), in
-/// groups of eight pixels (the last group may carry stale lanes past `m`), so that the divisions
-/// run over contiguous lanes: read with a stride of one pixel, they had compiled to scalar code.
-///
-/// On x86-64 CPUs with AVX-512 an 8 × 8 block is transposed with 24 shuffles
-/// ([`transpose_avx512`]), chosen at run time; elsewhere value by value.
-#[inline(always)]
-fn transpose(planes: &[[f64; LINES]; LANES], m: usize, lanes: &mut [[f64; LANES]; LINES]) {
-    let groups = m.min(LANES).div_ceil(8);
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        // SAFETY: the CPU supports AVX-512 F (checked just above).
-        unsafe { transpose_avx512(planes, groups, lanes) };
-        return;
-    }
-    transpose_scalar(planes, groups, lanes);
-}
-
-/// [`transpose`] of `groups` groups of eight pixels, value by value.
-#[inline(always)]
-fn transpose_scalar(
-    planes: &[[f64; LINES]; LANES],
-    groups: usize,
-    lanes: &mut [[f64; LANES]; LINES],
-) {
-    for l in 0..(8 * groups).min(LANES) {
-        for (i, lane) in lanes.iter_mut().enumerate() {
-            lane[l] = planes[l][i];
-        }
-    }
-}
-
-/// [`transpose`] of `groups` groups of eight pixels: per group, eight 512-bit loads, an 8 × 8
-/// transposition in 24 shuffles and eight stores.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn transpose_avx512(
-    planes: &[[f64; LINES]; LANES],
-    groups: usize,
-    lanes: &mut [[f64; LANES]; LINES],
-) {
-    use std::arch::x86_64::*;
-    const _: () = assert!(LINES == 8 && LANES.is_multiple_of(8));
-    let pick_low = _mm512_setr_epi64(0, 1, 8, 9, 4, 5, 12, 13);
-    let pick_high = _mm512_setr_epi64(2, 3, 10, 11, 6, 7, 14, 15);
-    for g in 0..groups.min(LANES / 8) {
-        // SAFETY: AVX-512 F is enabled; pixel `8g + j < LANES` is indexed with a bounds check
-        // and is eight `f64`, one unaligned 512-bit load.
-        let r: [__m512d; 8] =
-            std::array::from_fn(|j| unsafe { _mm512_loadu_pd(planes[8 * g + j].as_ptr()) });
-        // Pairs of pixels interleaved: even planes, odd planes.
-        let t: [__m512d; 8] = std::array::from_fn(|k| {
-            let (a, b) = (r[k & !1], r[k | 1]);
-            if k % 2 == 0 {
-                _mm512_unpacklo_pd(a, b)
-            } else {
-                _mm512_unpackhi_pd(a, b)
-            }
-        });
-        // u[4h + q]: plane q (low half) and plane q + 4 (high half) of pixels 4h..4h + 4.
-        let quad = |a: __m512d, b: __m512d, high: bool| {
-            _mm512_permutex2var_pd(a, if high { pick_high } else { pick_low }, b)
-        };
-        let u = [
-            quad(t[0], t[2], false), // planes 0, 4
-            quad(t[1], t[3], false), // planes 1, 5
-            quad(t[0], t[2], true),  // planes 2, 6
-            quad(t[1], t[3], true),  // planes 3, 7
-            quad(t[4], t[6], false),
-            quad(t[5], t[7], false),
-            quad(t[4], t[6], true),
-            quad(t[5], t[7], true),
-        ];
-        for q in 0..4 {
-            let low = _mm512_shuffle_f64x2::<0x44>(u[q], u[4 + q]);
-            let high = _mm512_shuffle_f64x2::<0xee>(u[q], u[4 + q]);
-            // SAFETY: AVX-512 F is enabled; `8g + 8 ≤ LANES`, so each slice holds the eight
-            // `f64` stored (unaligned).
-            unsafe {
-                _mm512_storeu_pd(lanes[q][8 * g..].as_mut_ptr(), low);
-                _mm512_storeu_pd(lanes[q + 4][8 * g..].as_mut_ptr(), high);
-            }
-        }
-    }
-}
-
 /// Everything the pass needs that is constant over a frame.
 pub(crate) struct DeferredPass<'a> {
     pub shader: BlinnPhong,
@@ -178,8 +91,6 @@ pub(crate) struct Block {
     /// pixel side by side: one vector store, and the evaluation vectorises.
     edge_sum: [f64; LANES],
     planes: [[f64; LINES]; LANES],
-    /// `planes` transposed (`[plane][lane]`) by [`DeferredPass::divide`].
-    lanes: [[f64; LANES]; LINES],
     /// Their depth-buffer values.
     depth: [f32; LANES],
     /// Their ray coordinate `x' = (u − c_x)/f_x`.
@@ -199,7 +110,6 @@ impl Default for Block {
             column: [0; LANES],
             edge_sum: [0.0; LANES],
             planes: [[0.0; LINES]; LANES],
-            lanes: [[0.0; LANES]; LINES],
             depth: [0.0; LANES],
             ray_x: [0.0; LANES],
             texel: [[0.0; LANES]; 2],
@@ -351,13 +261,12 @@ impl DeferredPass<'_> {
         let m = m.min(LANES);
         let k = &self.intrinsics;
         let inv_fx = 1.0 / k.fx;
-        transpose(&block.planes, m, &mut block.lanes);
-        let lanes = &block.lanes;
+        let planes = &block.planes;
         let mut inv_d = [0.0; LANES];
         let mut z = [0.0; LANES];
         let mut xr = [0.0; LANES];
         for l in 0..m {
-            inv_d[l] = 1.0 / lanes[0][l];
+            inv_d[l] = 1.0 / planes[l][0];
             z[l] = block.edge_sum[l] * inv_d[l];
             xr[l] = (block.column[l] as f64 - k.cx) * inv_fx;
             block.ray_x[l] = xr[l] as f32;
@@ -378,21 +287,21 @@ impl DeferredPass<'_> {
         let s = &mut block.surface;
         for (c, normal) in s.normal.iter_mut().enumerate() {
             for l in 0..m {
-                normal[l] = (lanes[NORMAL + c][l] * inv_d[l]) as f32;
+                normal[l] = (planes[l][NORMAL + c] * inv_d[l]) as f32;
             }
         }
         match self.albedo {
             Albedo::Texture { .. } => {
                 for (c, texel) in block.texel.iter_mut().enumerate() {
                     for l in 0..m {
-                        texel[l] = lanes[ALBEDO + c][l] * inv_d[l];
+                        texel[l] = planes[l][ALBEDO + c] * inv_d[l];
                     }
                 }
             }
             Albedo::VertexColors => {
                 for (c, albedo) in s.albedo.iter_mut().enumerate() {
                     for l in 0..m {
-                        albedo[l] = (lanes[ALBEDO + c][l] * inv_d[l]) as f32;
+                        albedo[l] = (planes[l][ALBEDO + c] * inv_d[l]) as f32;
                     }
                 }
             }
@@ -475,27 +384,6 @@ impl DeferredPass<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn transposition_moves_every_plane_of_every_pixel() {
-        let mut planes = [[0.0; LINES]; LANES];
-        for (l, pixel) in planes.iter_mut().enumerate() {
-            for (i, value) in pixel.iter_mut().enumerate() {
-                *value = (100 * l + i) as f64;
-            }
-        }
-        for m in [1, 7, 8, 9, 31, 63, 64] {
-            let (mut fast, mut plain) = ([[f64::NAN; LANES]; LINES], [[f64::NAN; LANES]; LINES]);
-            transpose(&planes, m, &mut fast);
-            transpose_scalar(&planes, m.div_ceil(8), &mut plain);
-            for (i, (fast, plain)) in fast.iter().zip(&plain).enumerate() {
-                for l in 0..m {
-                    assert_eq!(fast[l], planes[l][i], "m {m}, plane {i}, lane {l}");
-                    assert_eq!(plain[l], planes[l][i], "m {m}, plane {i}, lane {l}");
-                }
-            }
-        }
-    }
 
     #[test]
     fn run_end_finds_the_end_of_every_run() {

@@ -247,7 +247,7 @@ impl Renderer {
 
 /// A worker thread's scratch for the tiles it shades, kept across tiles and frames so that it
 /// stays in cache: one planes buffer per tile was written from memory every frame, and a fresh
-/// [`Block`] per tile zeroed its ~16 KiB for nothing (lanes are written before they are read).
+/// [`Block`] per tile zeroed its ~12 KiB for nothing (lanes are written before they are read).
 #[derive(Default)]
 struct TileScratch {
     /// The interpolation planes of the tile's set-ups (in bin order).
