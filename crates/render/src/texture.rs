@@ -315,7 +315,7 @@ impl Texture {
             }
         }
         // Every lane's two texel rows start loading before the first is read. (Unchecked
-        // addresses: a prefetch never faults, and a bounds check per tap cost 3 % of a frame.)
+        // addresses: a prefetch never faults, so a bounds check per tap would buy nothing.)
         let texels = self.texels.as_ptr();
         for k in 0..m {
             let first = taps.index[k] as usize;
