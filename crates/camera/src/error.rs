@@ -30,6 +30,13 @@ pub enum CameraError {
         path: PathBuf,
         source: serde_json::Error,
     },
+    /// A rigid transform has a non-finite entry or a rotation that is not proper
+    /// ([`crate::RigidTransform::validate`]).
+    #[error("degenerate rigid transform: {reason}")]
+    InvalidTransform { reason: String },
+    /// A rigid-transform (pose) file is unreadable, not the expected JSON or not a rigid motion.
+    #[error("{}: {reason}", path.display())]
+    TransformFile { path: PathBuf, reason: String },
     /// A depth image is unreadable or of the wrong kind.
     #[error("{}: {reason}", path.display())]
     DepthImage { path: PathBuf, reason: String },

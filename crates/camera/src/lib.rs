@@ -22,4 +22,4 @@ pub use depth_png::{read_depth_png, write_depth_png};
 pub use error::CameraError;
 pub use intrinsics::{Intrinsics, DEFAULT_FOV_DEG};
 pub use rigid_fit::{horn_rotation, quaternion_to_matrix};
-pub use rigid_transform::RigidTransform;
+pub use rigid_transform::{RigidTransform, ROTATION_TOLERANCE};

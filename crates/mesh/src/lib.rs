@@ -9,6 +9,7 @@
 //! area in pixel coordinates (normals of the back-projected surface face the camera); boundary
 //! constraint edges are never flipped.
 
+pub mod color;
 mod depth_aware;
 mod edge_map;
 mod error;

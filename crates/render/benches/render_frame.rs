@@ -1,5 +1,5 @@
-//! Speed of Algorithm 3 on a 1280×720 frame of a 30k-triangle textured, shaded mesh (issue 4
-//! target: ≤ 10 ms on the 2-core build machine), and of the depth-only ground-truth path.
+//! Speed of Algorithm 3 on a 1280×720 frame of a 30k-triangle textured, shaded mesh (target:
+//! ≤ 10 ms on the 2-core build machine), and of the depth-only ground-truth path.
 //!
 //! The mesh is a bumpy, face-like height field (124 × 123 vertices, 30 012 triangles) seen from
 //! 0.5 m, covering about half of the frame; texture 1024², default material and light.

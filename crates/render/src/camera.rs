@@ -1,7 +1,6 @@
-use visage_camera::Intrinsics;
+use visage_camera::{CameraError, Intrinsics, RigidTransform};
 
 use crate::mat4::Mat4;
-use crate::pose::Pose;
 use crate::projection::{projection_matrix, CAMERA_TO_EYE};
 use crate::RenderError;
 
@@ -15,8 +14,9 @@ pub const DEFAULT_FAR: f64 = 1e3;
 pub struct Camera {
     /// Pinhole intrinsics; the rendered image is `intrinsics.width × intrinsics.height`.
     pub intrinsics: Intrinsics,
-    /// World → camera transform (identity: world coordinates are camera coordinates).
-    pub pose: Pose,
+    /// World → camera transform `x_cam = R · x_world + t` (identity: world coordinates are
+    /// camera coordinates).
+    pub pose: RigidTransform,
     /// Near clipping plane `z > 0`, metres; geometry closer than this is clipped away.
     pub near: f64,
     /// Far clipping plane, metres.
@@ -28,7 +28,7 @@ impl Camera {
     pub fn new(intrinsics: Intrinsics) -> Result<Camera, RenderError> {
         let cam = Camera {
             intrinsics,
-            pose: Pose::IDENTITY,
+            pose: RigidTransform::IDENTITY,
             near: DEFAULT_NEAR,
             far: DEFAULT_FAR,
         };
@@ -37,7 +37,7 @@ impl Camera {
     }
 
     /// The same camera with another world → camera pose.
-    pub fn with_pose(self, pose: Pose) -> Result<Camera, RenderError> {
+    pub fn with_pose(self, pose: RigidTransform) -> Result<Camera, RenderError> {
         let cam = Camera { pose, ..self };
         cam.validate()?;
         Ok(cam)
@@ -50,10 +50,16 @@ impl Camera {
         Ok(cam)
     }
 
-    /// Checks intrinsics, pose and `0 < near < far < ∞`.
+    /// Checks intrinsics, pose ([`RigidTransform::validate`]) and `0 < near < far < ∞`.
     pub fn validate(&self) -> Result<(), RenderError> {
         self.intrinsics.validate()?;
-        self.pose.validate()?;
+        self.pose.validate().map_err(|e| match e {
+            CameraError::InvalidTransform { reason } => RenderError::Transform {
+                what: "pose",
+                reason,
+            },
+            e => RenderError::Camera(e),
+        })?;
         if !(self.near.is_finite()
             && self.far.is_finite()
             && self.near > 0.0
@@ -75,6 +81,28 @@ impl Camera {
 
     /// The view matrix `V` of Eq. (6.1) in OpenGL eye space: `F · [R t]`.
     pub fn view_matrix(&self) -> Mat4 {
-        CAMERA_TO_EYE.mul(&self.pose.matrix())
+        CAMERA_TO_EYE.mul(&Mat4::from_rigid(&self.pose))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_a_pose_that_is_not_a_rotation() {
+        let k = Intrinsics::new(64, 48, 60.0, 60.0, 31.5, 23.5).unwrap();
+        let camera = Camera::new(k).unwrap();
+        let mirror = RigidTransform {
+            rotation: [[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            translation: [0.0, 0.0, 0.5],
+        };
+        let err = camera.with_pose(mirror).unwrap_err().to_string();
+        assert!(err.contains("pose") && err.contains("reflection"), "{err}");
+        let pose = RigidTransform {
+            translation: [0.0, 0.0, 0.5],
+            ..RigidTransform::IDENTITY
+        };
+        assert_eq!(camera.with_pose(pose).unwrap().pose, pose);
     }
 }

@@ -1,41 +1,13 @@
-//! Colour encoding: linear RGB ↔ sRGB (IEC 61966-2-1) and PNG output.
+//! Colour output: linear RGB written as 8-bit sRGB PNG. The sRGB ↔ linear conversions
+//! (IEC 61966-2-1) are [`visage_mesh::color`]'s, re-exported here.
 
 use std::path::Path;
 
+pub use visage_mesh::color::{
+    linear_to_srgb, linear_to_srgb_u8, srgb_to_linear, srgb_to_linear_u8,
+};
+
 use crate::RenderError;
-
-/// sRGB-encoded value in `[0, 1]` → linear.
-#[inline]
-pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-/// Linear value → sRGB-encoded, clamped to `[0, 1]` (NaN → 0).
-#[inline]
-pub fn linear_to_srgb(c: f32) -> f32 {
-    let c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
-    if c <= 0.003_130_8 {
-        12.92 * c
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// An 8-bit sRGB value → linear.
-#[inline]
-pub fn srgb_to_linear_u8(c: u8) -> f32 {
-    srgb_to_linear(c as f32 / 255.0)
-}
-
-/// A linear value → 8-bit sRGB, rounded.
-#[inline]
-pub fn linear_to_srgb_u8(c: f32) -> u8 {
-    (linear_to_srgb(c) * 255.0 + 0.5) as u8
-}
 
 /// Writes a linear RGB image (`width × height`, row-major, values clamped to `[0, 1]`) as an
 /// 8-bit sRGB PNG. Errors name the file.
@@ -60,19 +32,4 @@ pub fn write_srgb_png(
         path: path.to_owned(),
         reason: format!("cannot write PNG: {e}"),
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn srgb_round_trips_every_byte() {
-        for b in 0..=255u8 {
-            assert_eq!(linear_to_srgb_u8(srgb_to_linear_u8(b)), b);
-        }
-        assert_eq!(linear_to_srgb_u8(f32::NAN), 0);
-        assert_eq!(linear_to_srgb_u8(7.0), 255);
-        assert!((srgb_to_linear(0.5) - 0.214_041).abs() < 1e-5);
-    }
 }

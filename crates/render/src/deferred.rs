@@ -14,7 +14,7 @@
 
 use visage_camera::{DepthKind, Intrinsics};
 
-use crate::frame::Albedo;
+use crate::albedo::Albedo;
 use crate::interpolation::{SetupPlanes, ALBEDO, LINES, NORMAL};
 use crate::rasterize::{ScreenTriangle, NO_TRIANGLE};
 use crate::shading::{BlinnPhong, SurfaceLanes, LANES};

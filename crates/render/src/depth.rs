@@ -1,10 +1,9 @@
 use rayon::prelude::*;
-use visage_camera::{DepthKind, DepthMap, Intrinsics};
+use visage_camera::{DepthKind, DepthMap, Intrinsics, RigidTransform};
 use visage_mesh::TriMesh;
 
 use crate::camera::Camera;
 use crate::mat4::Mat4;
-use crate::pose::Pose;
 use crate::rasterize::{CullMode, Rasterizer, NO_TRIANGLE};
 use crate::RenderError;
 
@@ -37,7 +36,7 @@ pub struct DepthRender {
 pub fn render_depth(
     mesh: &TriMesh,
     intrinsics: &Intrinsics,
-    pose: Option<&Pose>,
+    pose: Option<&RigidTransform>,
     kind: DepthKind,
 ) -> Result<DepthRender, RenderError> {
     let mut camera = Camera::new(*intrinsics)?;

@@ -7,6 +7,7 @@ use rayon::prelude::*;
 use visage_camera::{DepthKind, DepthMap};
 use visage_mesh::TriMesh;
 
+use crate::albedo::Albedo;
 use crate::camera::Camera;
 use crate::deferred::{Block, DeferredPass, Rows, TileSetups};
 use crate::interpolation::{SetupPlanes, VertexChannels};
@@ -14,20 +15,7 @@ use crate::mat4::{Mat3, Mat4};
 use crate::normals::{normal_matrix, transform_normal, vertex_normals_into};
 use crate::rasterize::{CullMode, Rasterizer, NO_TRIANGLE, TILE_ROWS};
 use crate::shading::{BlinnPhong, Light, Material};
-use crate::texture::{Texture, Wrap};
 use crate::RenderError;
-
-/// Where the surface colour `C_tex` of Eq. (6.4) comes from.
-#[derive(Clone, Copy, Debug)]
-pub enum Albedo<'a> {
-    /// Bilinear samples (Eq. (6.3)) of `texture` at the mesh's interpolated UVs (requires
-    /// `mesh.uvs`).
-    Texture { texture: &'a Texture, wrap: Wrap },
-    /// The mesh's interpolated vertex colours (requires `mesh.colors`).
-    VertexColors,
-    /// One linear RGB colour for the whole surface.
-    Constant([f32; 3]),
-}
 
 /// Everything besides geometry and camera that decides a frame's colours.
 #[derive(Clone, Copy, Debug)]
@@ -182,7 +170,7 @@ impl Renderer {
             _ => {}
         }
         crate::validate::check_model(model)?;
-        let model_view: Mat3 = camera.pose.matrix().mul(model).linear();
+        let model_view: Mat3 = Mat4::from_rigid(&camera.pose).mul(model).linear();
         let nm = normal_matrix(&model_view)?;
 
         self.rasterizer

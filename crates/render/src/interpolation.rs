@@ -11,41 +11,9 @@
 use rayon::prelude::*;
 use visage_mesh::TriMesh;
 
-use crate::frame::Albedo;
+use crate::albedo::Albedo;
+use crate::plane::Plane;
 use crate::rasterize::ScreenTriangle;
-
-/// An affine function of the pixel centre `(x, y)`: `c + dx·(x − x₀) + dy·(y − y₀)` about the
-/// origin `(x₀, y₀)` of its set-up ([`SetupPlanes::origin`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct Plane {
-    pub c: f64,
-    pub dx: f64,
-    pub dy: f64,
-}
-
-impl Plane {
-    /// `Σ a_i · planes_i`.
-    #[inline(always)]
-    fn combine(planes: &[Plane; 3], a: [f64; 3]) -> Plane {
-        let [p, q, r] = planes;
-        Plane {
-            c: a[0] * p.c + a[1] * q.c + a[2] * r.c,
-            dx: a[0] * p.dx + a[1] * q.dx + a[2] * r.dx,
-            dy: a[0] * p.dy + a[1] * q.dy + a[2] * r.dy,
-        }
-    }
-
-    /// `Σ planes_i`: [`Plane::combine`] with unit weights (`1 · x = x` exactly).
-    #[inline(always)]
-    fn sum(planes: &[Plane; 3]) -> Plane {
-        let [p, q, r] = planes;
-        Plane {
-            c: p.c + q.c + r.c,
-            dx: p.dx + q.dx + r.dx,
-            dy: p.dy + q.dy + r.dy,
-        }
-    }
-}
 
 /// Channels interpolated across a set-up: the camera-space normal (three), then the albedo
 /// source's (see [`VertexChannels`]).

@@ -8,7 +8,8 @@
 //! # Conventions
 //! - **Camera coordinates** (the project's, see `visage_camera`): x right, y down, z forward,
 //!   metres. Without a pose the camera sits at the origin looking down +z and mesh coordinates
-//!   *are* camera coordinates — what `visage fuse` writes. A [`Pose`] maps world (mesh)
+//!   *are* camera coordinates — what `visage fuse` writes. A pose
+//!   ([`visage_camera::RigidTransform`], as a matrix [`Mat4::from_rigid`]) maps world (mesh)
 //!   coordinates to camera coordinates: `x_cam = R · x + t`.
 //! - **Pixels**: `u` right, `v` down; the centre of pixel `(i, j)` is at `(i, j)`; a point
 //!   projects to `(fx·x/z + cx, fy·y/z + cy)` ([`visage_camera::Intrinsics::project`]).
@@ -33,7 +34,7 @@
 //!   interpolation planes, the tile scan and the shading pass also have AVX-512 and AVX2 builds
 //!   chosen at run time, with identical results (no float contraction or reordering).
 //!
-//! # Decisions where the paper, the ERRATA and issue 4 are silent
+//! # Decisions where the paper and the ERRATA are silent
 //! - `P` carries `(2cx + 1)/W` instead of ERRATA 12's `2cx/W` because pixel centres sit at
 //!   integers here; with it, the chain of Eq. (6.1) reproduces `Intrinsics::project` exactly.
 //! - Rasterisation is deferred: a visibility buffer (z, set-up id) first, then one exact
@@ -54,6 +55,7 @@
 //! - [`Rasterizer`]: reusable state for repeated frames; [`Rasterizer::fragment`] gives exact
 //!   per-pixel depth and barycentrics.
 
+mod albedo;
 pub mod camera;
 pub mod clip;
 pub mod color;
@@ -65,7 +67,7 @@ mod frame;
 mod interpolation;
 pub mod mat4;
 pub mod normals;
-pub mod pose;
+mod plane;
 mod prefetch;
 pub mod projection;
 pub mod projective;
@@ -77,14 +79,14 @@ pub mod texture;
 pub mod turntable;
 mod validate;
 
+pub use albedo::Albedo;
 pub use camera::{Camera, DEFAULT_FAR, DEFAULT_NEAR};
 pub use color::write_srgb_png;
 pub use depth::{render_depth, render_depth_with, DepthRender};
 pub use error::RenderError;
-pub use frame::{Albedo, Frame, Renderer, Scene};
+pub use frame::{Frame, Renderer, Scene};
 pub use mat4::{Mat3, Mat4};
 pub use normals::{normal_matrix, vertex_normals};
-pub use pose::Pose;
 pub use projection::{projection_matrix, viewport};
 pub use projective::projective_uvs;
 pub use rasterize::{CullMode, Fragment, Rasterizer, ScreenTriangle, NO_TRIANGLE, TILE_ROWS};

@@ -1,6 +1,8 @@
 //! Small fixed-size linear algebra for the transform chain: 4×4 homogeneous matrices and 3×3
 //! linear parts, row-major, `f64`.
 
+use visage_camera::RigidTransform;
+
 /// A 4×4 homogeneous matrix, row-major (`m[row][col]`), acting on column vectors `x' = M·x`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Mat4(pub [[f64; 4]; 4]);
@@ -27,6 +29,12 @@ impl Mat4 {
             [a[2][0], a[2][1], a[2][2], t[2]],
             [0.0, 0.0, 0.0, 1.0],
         ])
+    }
+
+    /// The rigid motion `t` as the 4×4 matrix `[R t; 0 1]` (e.g. a camera pose, the `[R t]` of
+    /// Eq. (6.1)).
+    pub fn from_rigid(t: &RigidTransform) -> Mat4 {
+        Mat4::from_linear_translation(Mat3(t.rotation), t.translation)
     }
 
     /// A translation by `t`.

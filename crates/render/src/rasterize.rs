@@ -22,8 +22,8 @@ use rayon::prelude::*;
 use crate::camera::Camera;
 use crate::clip::{clip_triangle, far_distance, near_distance, ClipVertex};
 use crate::edge::{signed_area2, Edge};
-use crate::interpolation::Plane;
 use crate::mat4::Mat4;
+use crate::plane::Plane;
 use crate::projection::viewport;
 use crate::simd::with_simd;
 use crate::RenderError;
@@ -198,7 +198,7 @@ impl Rasterizer {
         self.height = height;
 
         // Step 1–2 of Algorithm 3: per-vertex transforms.
-        let model_view = camera.pose.matrix().mul(model);
+        let model_view = Mat4::from_rigid(&camera.pose).mul(model);
         let to_clip = camera.camera_to_clip();
         self.camera_positions.resize(positions.len(), [0.0; 3]);
         self.vertices
@@ -1113,7 +1113,7 @@ mod tests {
             // … and the baseline build of the same functions.
             let n = positions.len();
             let (mut cam, mut vertices) = (vec![[0.0; 3]; n], vec![ProjectedVertex::default(); n]);
-            let model_view = camera.pose.matrix().mul(&model);
+            let model_view = Mat4::from_rigid(&camera.pose).mul(&model);
             let size = [k.width, k.height];
             let to_clip = camera.camera_to_clip();
             project_vertices(

@@ -1,12 +1,12 @@
 //! Acceptance: depth of analytic scenes equals the analytic value within 1e-5 relative at every
-//! covered pixel centre; coverage has no holes or double hits (issue 4).
+//! covered pixel centre; coverage has no holes or double hits.
 
 mod common;
 
-use visage_camera::{DepthKind, Intrinsics};
+use visage_camera::{DepthKind, Intrinsics, RigidTransform};
 use visage_mesh::TriMesh;
 use visage_render::{
-    render_depth, render_depth_with, Camera, CullMode, Mat3, Mat4, Pose, Rasterizer, NO_TRIANGLE,
+    render_depth, render_depth_with, Camera, CullMode, Mat3, Mat4, Rasterizer, NO_TRIANGLE,
 };
 
 const REL_TOL: f64 = 1e-5;
@@ -109,7 +109,7 @@ fn posed_cube_depth_matches_ray_box_intersection() {
     let cube = common::cube([0.0; 3], h);
     let r = Mat3::rotation([0.4, 1.0, 0.3], 0.9);
     let t = [0.03, -0.02, 0.7];
-    let pose = Pose::new(r.0, t).unwrap();
+    let pose = RigidTransform::new(r.0, t).unwrap();
     let out = render_depth(&cube, &k, Some(&pose), DepthKind::Z).unwrap();
     let rt = r.transpose();
     let o_world = rt.mul_vec([-t[0], -t[1], -t[2]]);

@@ -5,8 +5,8 @@ mod common;
 
 use std::path::Path;
 
-use visage_camera::{DepthKind, Intrinsics};
-use visage_render::{render_depth, Pose, NO_TRIANGLE};
+use visage_camera::{DepthKind, Intrinsics, RigidTransform};
+use visage_render::{render_depth, NO_TRIANGLE};
 
 /// Acceptance bound on the distance of back-projected depth to the mesh, metres.
 const MAX_DISTANCE_M: f64 = 0.05e-3;
@@ -27,7 +27,7 @@ fn ict_neutral_face_depth_back_projects_onto_the_mesh() {
     // ICT is y-up with the face looking along +z: turn it 180° about x to face the camera,
     // and place the face 45 cm in front of it.
     let k = Intrinsics::new(640, 480, 900.0, 900.0, 319.5, 239.5).unwrap();
-    let pose = Pose::new(
+    let pose = RigidTransform::new(
         [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]],
         [0.0, 0.12, 0.55],
     )

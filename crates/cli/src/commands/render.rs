@@ -11,7 +11,7 @@ use visage_camera::{write_depth_png, DepthKind, Intrinsics};
 use visage_mesh::TriMesh;
 use visage_render::{
     projective_uvs, turntable, write_srgb_png, Albedo, Camera, CullMode, Frame, Mat4, Material,
-    Pose, Renderer, Scene, Texture, Wrap, UNLIT,
+    Renderer, Scene, Texture, Wrap, UNLIT,
 };
 
 /// Depth PNG scale: stored value = metres × 1000 (millimetres), what `visage fuse --depth` reads.
@@ -117,7 +117,7 @@ impl RenderConfig {
             Camera::new(k).with_context(|| format!("{}", args.intrinsics.display()))?;
         if let Some(path) = &args.pose {
             camera = camera
-                .with_pose(Pose::load_json(path)?)
+                .with_pose(visage_camera::RigidTransform::load_json(path)?)
                 .with_context(|| format!("{}", path.display()))?;
         }
         let texture = match &args.texture {
@@ -134,7 +134,7 @@ impl RenderConfig {
                             t.height()
                         );
                     }
-                    mesh.uvs = projective_uvs(&mesh.vertices, &k, &camera.pose.matrix());
+                    mesh.uvs = projective_uvs(&mesh.vertices, &k, &Mat4::from_rigid(&camera.pose));
                 } else if mesh.uvs.is_empty() {
                     bail!(
                         "{}: the mesh has no texture coordinates; add --projective to take them from the camera",

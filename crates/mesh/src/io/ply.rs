@@ -10,8 +10,8 @@
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
-use super::color::{linear_to_srgb_u8, srgb_to_linear};
 use super::MeshIoError;
+use crate::color::{linear_to_srgb_u8, srgb_to_linear};
 use crate::TriMesh;
 
 /// Encoding of a PLY file to write.
@@ -630,8 +630,8 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, MeshIoError> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::color::linear_to_srgb as srgb;
     use super::*;
+    use crate::color::linear_to_srgb as srgb;
 
     fn sample_mesh() -> TriMesh {
         let mut m = TriMesh::new(
