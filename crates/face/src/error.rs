@@ -19,7 +19,8 @@ pub enum FaceError {
         expected: &'static str,
         found: String,
     },
-    /// A TFLite flatbuffer is malformed or uses something this engine does not implement.
+    /// A TFLite flatbuffer is malformed, uses something the engine (`visage-nn`) does not
+    /// implement, or is not the network expected (input shape, output names).
     #[error("{name}: invalid or unsupported TFLite model: {reason}")]
     Tflite { name: String, reason: String },
     /// Fetching the npm package failed.
@@ -48,4 +49,12 @@ pub enum FaceError {
         value: f64,
         reason: &'static str,
     },
+}
+
+impl From<visage_nn::NnError> for FaceError {
+    fn from(e: visage_nn::NnError) -> Self {
+        match e {
+            visage_nn::NnError::Tflite { name, reason } => FaceError::Tflite { name, reason },
+        }
+    }
 }

@@ -3,19 +3,16 @@
 //! video tracking, and the metric face geometry that turns 468 landmarks into a metric mesh and a
 //! dense depth map.
 //!
-//! Layers: [`tflite`] (flatbuffer reader) → [`network`] (graph compiled to [`ops`] kernels) →
-//! networks ([`detector`], [`landmarker`]) → [`tracker`] → [`face_geometry`].
+//! Layers: [`model_files`] (verified `.tflite` files) → the inference engine of `visage-nn`
+//! ([`Network`]) → networks ([`detector`], [`landmarker`]) → [`tracker`] → [`face_geometry`].
 
 mod error;
-pub mod float16;
 pub mod model_files;
-pub mod network;
-pub mod ops;
-pub mod tflite;
 
 pub use error::FaceError;
 pub use model_files::{models_dir, ModelFile};
-pub use network::Network;
+// The inference engine lives in `visage-nn`; re-exported under its former paths.
+pub use visage_nn::{float16, network, ops, tflite, Network, NnError};
 pub mod anchors;
 pub mod landmark_network;
 

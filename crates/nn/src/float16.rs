@@ -1,5 +1,5 @@
-//! IEEE 754 binary16 → binary32 conversion, for the float16 weights of MediaPipe's models
-//! (they sit behind `DEQUANTIZE` ops that the engine folds at load time).
+//! IEEE 754 binary16 → binary32 conversion, for float16 weights (in MediaPipe's models they
+//! sit behind `DEQUANTIZE` ops that the engine folds at load time).
 
 /// Converts one little-endian binary16 value to `f32`, exactly (every half is representable).
 ///

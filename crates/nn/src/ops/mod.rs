@@ -1,4 +1,4 @@
-//! Hand-written NHWC kernels for the operator set of MediaPipe's face networks.
+//! Hand-written NHWC kernels for the engine's operator set (that of MediaPipe's face networks).
 //!
 //! All tensors have batch 1 and are stored row-major as `[H, W, C]` (channels fastest), like
 //! TFLite. Inner loops run over contiguous channels so that the compiler vectorises them.

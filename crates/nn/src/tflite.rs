@@ -1,16 +1,17 @@
 //! A bounds-checked reader for the TFLite flatbuffer format (`schema.fbs` of TensorFlow Lite),
-//! limited to what MediaPipe's face networks use.
+//! limited to the fields and operators the engine implements (those of MediaPipe's face
+//! networks).
 //!
 //! Why by hand: the generated readers of the `flatbuffers` crate would add a build step and a
 //! 5 000-line schema for the ten fields we read; every read here checks its bounds and turns a
-//! malformed file into [`FaceError::Tflite`] instead of a panic.
+//! malformed file into [`NnError::Tflite`] instead of a panic.
 //!
 //! Flatbuffer layout reminder: a table starts with an `i32` offset back to its vtable; the vtable
 //! holds `u16` field offsets (0 = absent, use the default); references to tables, vectors and
 //! strings are `u32` offsets relative to where they are stored; a vector is a `u32` length then the
 //! elements.
 
-use crate::FaceError;
+use crate::NnError;
 
 /// Element type of a tensor (`TensorType` in the schema).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -127,14 +128,14 @@ struct Fb<'a> {
 }
 
 impl<'a> Fb<'a> {
-    fn err(&self, reason: impl Into<String>) -> FaceError {
-        FaceError::Tflite {
+    fn err(&self, reason: impl Into<String>) -> NnError {
+        NnError::Tflite {
             name: self.name.to_owned(),
             reason: reason.into(),
         }
     }
 
-    fn bytes(&self, pos: usize, n: usize) -> Result<&'a [u8], FaceError> {
+    fn bytes(&self, pos: usize, n: usize) -> Result<&'a [u8], NnError> {
         pos.checked_add(n)
             .and_then(|end| self.buf.get(pos..end))
             .ok_or_else(|| {
@@ -145,22 +146,22 @@ impl<'a> Fb<'a> {
             })
     }
 
-    fn u16(&self, pos: usize) -> Result<u16, FaceError> {
+    fn u16(&self, pos: usize) -> Result<u16, NnError> {
         let b = self.bytes(pos, 2)?;
         Ok(u16::from_le_bytes([b[0], b[1]]))
     }
 
-    fn u32(&self, pos: usize) -> Result<u32, FaceError> {
+    fn u32(&self, pos: usize) -> Result<u32, NnError> {
         let b = self.bytes(pos, 4)?;
         Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
     }
 
-    fn i32(&self, pos: usize) -> Result<i32, FaceError> {
+    fn i32(&self, pos: usize) -> Result<i32, NnError> {
         Ok(self.u32(pos)? as i32)
     }
 
     /// Follows a `u32` forward reference stored at `pos`.
-    fn deref(&self, pos: usize) -> Result<usize, FaceError> {
+    fn deref(&self, pos: usize) -> Result<usize, NnError> {
         let off = self.u32(pos)? as usize;
         pos.checked_add(off)
             .filter(|&p| p < self.buf.len())
@@ -168,7 +169,7 @@ impl<'a> Fb<'a> {
     }
 
     /// Position of field `index` of the table at `table`, or `None` when absent.
-    fn field(&self, table: usize, index: usize) -> Result<Option<usize>, FaceError> {
+    fn field(&self, table: usize, index: usize) -> Result<Option<usize>, NnError> {
         let soff = self.i32(table)? as i64;
         let vtable = table as i64 - soff;
         if vtable < 0 || vtable as usize >= self.buf.len() {
@@ -184,7 +185,7 @@ impl<'a> Fb<'a> {
         Ok((off != 0).then_some(table + off))
     }
 
-    fn table_field(&self, table: usize, index: usize) -> Result<Option<usize>, FaceError> {
+    fn table_field(&self, table: usize, index: usize) -> Result<Option<usize>, NnError> {
         match self.field(table, index)? {
             Some(p) => Ok(Some(self.deref(p)?)),
             None => Ok(None),
@@ -192,38 +193,38 @@ impl<'a> Fb<'a> {
     }
 
     /// `(start, len)` of a vector field.
-    fn vector(&self, table: usize, index: usize) -> Result<(usize, usize), FaceError> {
+    fn vector(&self, table: usize, index: usize) -> Result<(usize, usize), NnError> {
         match self.table_field(table, index)? {
             Some(v) => Ok((v + 4, self.u32(v)? as usize)),
             None => Ok((0, 0)),
         }
     }
 
-    fn i32_vector(&self, table: usize, index: usize) -> Result<Vec<i32>, FaceError> {
+    fn i32_vector(&self, table: usize, index: usize) -> Result<Vec<i32>, NnError> {
         let (start, len) = self.vector(table, index)?;
         self.bytes(start, len.saturating_mul(4))?;
         (0..len).map(|i| self.i32(start + 4 * i)).collect()
     }
 
-    fn tables(&self, table: usize, index: usize) -> Result<Vec<usize>, FaceError> {
+    fn tables(&self, table: usize, index: usize) -> Result<Vec<usize>, NnError> {
         let (start, len) = self.vector(table, index)?;
         self.bytes(start, len.saturating_mul(4))?;
         (0..len).map(|i| self.deref(start + 4 * i)).collect()
     }
 
-    fn string(&self, table: usize, index: usize) -> Result<String, FaceError> {
+    fn string(&self, table: usize, index: usize) -> Result<String, NnError> {
         let (start, len) = self.vector(table, index)?;
         Ok(String::from_utf8_lossy(self.bytes(start, len)?).into_owned())
     }
 
-    fn scalar_i32(&self, table: usize, index: usize, default: i32) -> Result<i32, FaceError> {
+    fn scalar_i32(&self, table: usize, index: usize, default: i32) -> Result<i32, NnError> {
         match self.field(table, index)? {
             Some(p) => self.i32(p),
             None => Ok(default),
         }
     }
 
-    fn scalar_i8(&self, table: usize, index: usize, default: i8) -> Result<i8, FaceError> {
+    fn scalar_i8(&self, table: usize, index: usize, default: i8) -> Result<i8, NnError> {
         match self.field(table, index)? {
             Some(p) => Ok(self.bytes(p, 1)?[0] as i8),
             None => Ok(default),
@@ -231,13 +232,13 @@ impl<'a> Fb<'a> {
     }
 }
 
-fn usize_of(fb: &Fb, v: i32, what: &str) -> Result<usize, FaceError> {
+fn usize_of(fb: &Fb, v: i32, what: &str) -> Result<usize, NnError> {
     usize::try_from(v).map_err(|_| fb.err(format!("{what} = {v} is negative")))
 }
 
 impl TfliteModel {
     /// Parses a `.tflite` flatbuffer; `name` is used in error messages (the file name).
-    pub fn parse(bytes: &[u8], name: &str) -> Result<TfliteModel, FaceError> {
+    pub fn parse(bytes: &[u8], name: &str) -> Result<TfliteModel, NnError> {
         let fb = Fb { buf: bytes, name };
         if bytes.len() < 8 || &bytes[4..8] != b"TFL3" {
             return Err(
@@ -289,7 +290,7 @@ impl TfliteModel {
                 buffer,
             });
         }
-        let check_tensor = |i: i32| -> Result<usize, FaceError> {
+        let check_tensor = |i: i32| -> Result<usize, NnError> {
             usize::try_from(i)
                 .ok()
                 .filter(|&i| i < tensors.len())
@@ -352,7 +353,7 @@ impl TfliteModel {
     }
 }
 
-fn padding(fb: &Fb, table: usize, index: usize) -> Result<Padding, FaceError> {
+fn padding(fb: &Fb, table: usize, index: usize) -> Result<Padding, NnError> {
     match fb.scalar_i8(table, index, 0)? {
         0 => Ok(Padding::Same),
         1 => Ok(Padding::Valid),
@@ -360,7 +361,7 @@ fn padding(fb: &Fb, table: usize, index: usize) -> Result<Padding, FaceError> {
     }
 }
 
-fn positive(fb: &Fb, v: i32, what: &str) -> Result<usize, FaceError> {
+fn positive(fb: &Fb, v: i32, what: &str) -> Result<usize, NnError> {
     if v >= 1 {
         Ok(v as usize)
     } else {
@@ -368,7 +369,7 @@ fn positive(fb: &Fb, v: i32, what: &str) -> Result<usize, FaceError> {
     }
 }
 
-fn read_options(fb: &Fb, code: OpCode, o: usize) -> Result<OpOptions, FaceError> {
+fn read_options(fb: &Fb, code: OpCode, o: usize) -> Result<OpOptions, NnError> {
     let mut opt = OpOptions::default();
     match code {
         OpCode::Conv2d => {

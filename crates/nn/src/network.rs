@@ -1,15 +1,16 @@
-//! A small inference engine for MediaPipe's face networks: the TFLite graph is compiled once into
-//! a list of kernel calls over pre-allocated buffers, then run per frame without allocating.
+//! The graph compiler and runner: a TFLite graph is compiled once into a list of kernel calls
+//! over pre-allocated buffers, then run per input without allocating.
 //!
-//! Why not tract: `tract-tflite` 0.23 refuses these files (no `DEQUANTIZE`, no `PRELU`, registry
-//! not extensible). The networks use ten operators, all NHWC with batch 1, so the engine folds the
-//! float16 `DEQUANTIZE` constants to f32 at load time, re-lays out convolution weights for
-//! channel-contiguous inner loops and runs the hand-written kernels of [`crate::ops`].
+//! Why not tract: `tract-tflite` 0.23 refuses MediaPipe's face networks (no `DEQUANTIZE`, no
+//! `PRELU`, registry not extensible). Those networks use ten operators, all NHWC with batch 1, so
+//! the engine folds the float16 `DEQUANTIZE` constants to f32 at load time, re-lays out
+//! convolution weights for channel-contiguous inner loops and runs the hand-written kernels of
+//! [`crate::ops`].
 
 use crate::float16::f16_slice_to_f32;
 use crate::ops::{self, Conv2dWeights, Fused, Madd, Plain, Window};
 use crate::tflite::{OpCode, TensorType, TfliteModel};
-use crate::FaceError;
+use crate::NnError;
 
 /// One compiled operator. Tensor indices refer to [`Network`]'s value buffers.
 #[derive(Clone, Debug)]
@@ -83,8 +84,8 @@ pub struct Network {
     scratch: Vec<f32>,
 }
 
-fn err(name: &str, reason: String) -> FaceError {
-    FaceError::Tflite {
+fn err(name: &str, reason: String) -> NnError {
+    NnError::Tflite {
         name: name.to_owned(),
         reason,
     }
@@ -95,7 +96,7 @@ impl Network {
     ///
     /// Errors when the graph uses an operator variant the kernels do not implement (fused
     /// activations, dilation, depth multiplier ≠ 1, broadcasting adds, non-constant weights).
-    pub fn compile(model: &TfliteModel, name: &str) -> Result<Network, FaceError> {
+    pub fn compile(model: &TfliteModel, name: &str) -> Result<Network, NnError> {
         let n = model.tensors.len();
         let shapes: Vec<Vec<usize>> = model.tensors.iter().map(|t| t.shape.clone()).collect();
         // Constant values: float32 buffers directly, float16 through DEQUANTIZE.
@@ -163,7 +164,7 @@ impl Network {
                     op.options.activation
                 )));
             }
-            let input = |j: usize| -> Result<usize, FaceError> {
+            let input = |j: usize| -> Result<usize, NnError> {
                 op.inputs
                     .get(j)
                     .and_then(|&t| usize::try_from(t).ok())
@@ -172,7 +173,7 @@ impl Network {
             let Some(&y) = op.outputs.first() else {
                 return Err(ctx("no output".into()));
             };
-            let constant = |t: usize| -> Result<&Vec<f32>, FaceError> {
+            let constant = |t: usize| -> Result<&Vec<f32>, NnError> {
                 consts[t].as_ref().ok_or_else(|| {
                     ctx(format!(
                         "tensor {} must be a constant",
@@ -180,7 +181,7 @@ impl Network {
                     ))
                 })
             };
-            let activation = |t: usize| -> Result<usize, FaceError> {
+            let activation = |t: usize| -> Result<usize, NnError> {
                 if produced[t] {
                     Ok(t)
                 } else {
@@ -190,7 +191,7 @@ impl Network {
                     )))
                 }
             };
-            let nhwc = |t: usize| -> Result<[usize; 3], FaceError> {
+            let nhwc = |t: usize| -> Result<[usize; 3], NnError> {
                 match shapes[t].as_slice() {
                     &[1, h, w, c] => Ok([h, w, c]),
                     s => Err(ctx(format!(
@@ -387,7 +388,7 @@ impl Network {
     }
 
     /// Parses and compiles a `.tflite` file's bytes.
-    pub fn from_tflite(bytes: &[u8], name: &str) -> Result<Network, FaceError> {
+    pub fn from_tflite(bytes: &[u8], name: &str) -> Result<Network, NnError> {
         Network::compile(&TfliteModel::parse(bytes, name)?, name)
     }
 
@@ -508,10 +509,10 @@ impl Network {
 }
 
 fn check_out(
-    ctx: &dyn Fn(String) -> FaceError,
+    ctx: &dyn Fn(String) -> NnError,
     shape: &[usize],
     hwc: [usize; 3],
-) -> Result<(), FaceError> {
+) -> Result<(), NnError> {
     if shape == [1, hwc[0], hwc[1], hwc[2]] {
         Ok(())
     } else {
@@ -584,4 +585,113 @@ fn allocate_slots(
         }
     }
     (slot_of, slot_len)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tflite::{OpOptions, Operator, Tensor};
+
+    fn tensor(name: &str, shape: &[usize], dtype: TensorType, buffer: usize) -> Tensor {
+        Tensor {
+            name: name.into(),
+            shape: shape.to_vec(),
+            dtype,
+            buffer,
+        }
+    }
+
+    fn op(code: OpCode, inputs: &[i32], output: usize) -> Operator {
+        Operator {
+            code,
+            inputs: inputs.to_vec(),
+            outputs: vec![output],
+            options: OpOptions::default(),
+        }
+    }
+
+    fn f32_bytes(v: &[f32]) -> Vec<u8> {
+        v.iter().flat_map(|x| x.to_le_bytes()).collect()
+    }
+
+    /// `x → conv1×1 (float16 kernel behind DEQUANTIZE) → PReLU → + x → reshape`, values exact
+    /// in f32.
+    fn small_model() -> TfliteModel {
+        let f16: Vec<u8> = [0x3c00u16, 0, 0, 0xbc00] // [[1, 0], [0, −1]] as [C_out, 1, 1, C_in]
+            .iter()
+            .flat_map(|h| h.to_le_bytes())
+            .collect();
+        TfliteModel {
+            tensors: vec![
+                tensor("x", &[1, 2, 2, 2], TensorType::Float32, 0),
+                tensor("k16", &[2, 1, 1, 2], TensorType::Float16, 1),
+                tensor("k", &[2, 1, 1, 2], TensorType::Float32, 0),
+                tensor("bias", &[2], TensorType::Float32, 2),
+                tensor("conv", &[1, 2, 2, 2], TensorType::Float32, 0),
+                tensor("alpha", &[1, 1, 2], TensorType::Float32, 3),
+                tensor("prelu", &[1, 2, 2, 2], TensorType::Float32, 0),
+                tensor("sum", &[1, 2, 2, 2], TensorType::Float32, 0),
+                tensor("flat", &[1, 8], TensorType::Float32, 0),
+            ],
+            operators: vec![
+                op(OpCode::Dequantize, &[1], 2),
+                op(OpCode::Conv2d, &[0, 2, 3], 4),
+                op(OpCode::Prelu, &[4, 5], 6),
+                op(OpCode::Add, &[0, 6], 7),
+                op(OpCode::Reshape, &[7, -1], 8),
+            ],
+            inputs: vec![0],
+            outputs: vec![8],
+            buffers: vec![
+                Vec::new(),
+                f16,
+                f32_bytes(&[0.5, 0.0]),
+                f32_bytes(&[0.25, 0.5]),
+            ],
+        }
+    }
+
+    #[test]
+    fn runs_a_hand_built_graph_exactly_and_repeatably() {
+        let mut net = Network::compile(&small_model(), "small").unwrap();
+        assert_eq!(net.input_shape(), [1, 2, 2, 2]);
+        let x = [1.0, 2.0, -3.0, 4.0, 0.0, -1.0, 2.0, 2.0];
+        // conv: (x0 + 0.5, −x1); PReLU: negatives × (0.25, 0.5); then + x.
+        let expected = [2.5, 1.0, -3.625, 2.0, 0.5, 0.0, 4.5, 1.0];
+        for _ in 0..2 {
+            net.input_mut().copy_from_slice(&x);
+            net.run();
+            assert_eq!(net.output(0), Some(("flat", &expected[..])));
+            assert_eq!(net.output_named("flat"), Some(&expected[..]));
+        }
+        assert!(net.output(1).is_none() && net.output_named("sum").is_none());
+    }
+
+    #[test]
+    fn rejects_what_the_kernels_do_not_implement() {
+        let mut m = small_model();
+        m.operators[1].options.activation = 1;
+        let e = Network::compile(&m, "fused.tflite")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("fused.tflite") && e.contains("fused activation"),
+            "{e}"
+        );
+
+        let mut m = small_model();
+        m.tensors[1].dtype = TensorType::Other(9);
+        let e = Network::compile(&m, "int8").unwrap_err().to_string();
+        assert!(e.contains("unsupported type 9"), "{e}");
+
+        let mut m = small_model();
+        m.tensors[5].shape = vec![1, 2, 2, 2];
+        m.buffers[3] = f32_bytes(&[0.25; 8]);
+        assert!(Network::compile(&m, "broadcast").is_err());
+
+        let mut m = small_model();
+        m.operators.swap(2, 3);
+        let e = Network::compile(&m, "order").unwrap_err().to_string();
+        assert!(e.contains("used before it is computed"), "{e}");
+    }
 }

@@ -1,0 +1,66 @@
+//! A small CPU inference engine for TFLite convolutional networks, in pure Rust: it runs
+//! MediaPipe's BlazeFace detector and FaceMesh landmark network (used by `visage-face`) from the
+//! original `.tflite` files, without TensorFlow, tract or a C library.
+//!
+//! # What it runs
+//! One subgraph with one float32 input, batch 1, NHWC tensors; activations are float32, constant
+//! tensors float32, float16 or int32 (pad amounts). The operators are those of MediaPipe's face
+//! networks:
+//!
+//! | TFLite operator | kernel |
+//! |---|---|
+//! | `CONV_2D` | [`ops::conv2d`]: 1×1 stride-1 as a register-blocked GEMM (4 pixels × 16/8/4 output channels), other sizes through a small im2col |
+//! | `DEPTHWISE_CONV_2D` | [`ops::depthwise_conv2d`] (depth multiplier 1; 3×3 interior rows with the nine weight vectors in registers) |
+//! | `MAX_POOL_2D` | [`ops::max_pool2d`] |
+//! | `PAD` | [`ops::pad4`] (constant int32 paddings) |
+//! | `ADD` | [`ops::add`] (same shapes, no broadcasting) |
+//! | `PRELU` / `RELU` | [`ops::prelu`] (one slope per channel) / [`ops::relu`] |
+//! | `RESHAPE`, `CONCATENATION` | copies |
+//! | `DEQUANTIZE` | folded at load time (below) |
+//!
+//! Convolutions and pooling follow TensorFlow's `SAME`/`VALID` padding ([`ops::Window`]); fused
+//! activations, dilation and broadcasting adds are rejected when the graph is compiled, with a
+//! [`NnError`] naming the operator.
+//!
+//! # Pipeline
+//! - [`tflite`] reads the flatbuffer by hand, bounds-checked: a corrupt or truncated file is an
+//!   error, never a panic.
+//! - [`Network::compile`] folds float16 constants behind `DEQUANTIZE` to f32 once
+//!   ([`float16`], exact conversion), re-lays out convolution weights as
+//!   `[k_h·k_w·C_in, C_out]` (output channels contiguous) and shares activation buffers between
+//!   tensors whose lifetimes do not overlap, so the working set stays in cache.
+//! - [`Network::run`] executes the compiled steps over those buffers and never allocates.
+//!
+//! # Instruction sets
+//! The kernels are generic over the multiply-add ([`ops::Madd`]). On x86-64 CPUs with AVX2 and
+//! FMA, [`Network::run`] calls a copy of the step loop compiled with those target features and
+//! fused multiply-adds ([`ops::Fused`]), chosen at run time; elsewhere the portable path
+//! ([`ops::Plain`]) runs. The two agree to float rounding.
+//!
+//! # Benches
+//! `cargo bench -p visage-nn` times single convolution layers on random data (fixed seed), through
+//! [`Network::run`]; no model file is needed.
+//!
+//! # Example
+//! ```no_run
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let bytes = std::fs::read("models/face_landmark.tflite")?;
+//! let mut net = visage_nn::Network::from_tflite(&bytes, "face_landmark.tflite")?;
+//! assert_eq!(net.input_shape(), [1, 192, 192, 3]);
+//! net.input_mut().fill(0.5); // NHWC, f32
+//! net.run();
+//! let landmarks = net.output_named("conv2d_21").expect("output");
+//! # let _ = landmarks;
+//! # Ok(())
+//! # }
+//! ```
+
+mod error;
+pub mod float16;
+pub mod network;
+pub mod ops;
+pub mod tflite;
+
+pub use error::NnError;
+pub use network::Network;
+pub use tflite::TfliteModel;
