@@ -15,13 +15,9 @@ pub enum MorphableError {
     /// A required file of the model folder is absent.
     #[error("{path}: missing ({what})")]
     MissingFile { path: PathBuf, what: &'static str },
-    /// A malformed line of an OBJ file (1-based line number).
-    #[error("{path}:{line}: {reason}")]
-    Syntax {
-        path: PathBuf,
-        line: usize,
-        reason: String,
-    },
+    /// An OBJ file could not be read or is malformed (the error names the file and line).
+    #[error(transparent)]
+    Obj(#[from] visage_mesh::io::MeshIoError),
     /// A mode's mesh does not have the neutral mesh's vertex count.
     #[error("{path}: {got} vertices, the neutral mesh has {expected}")]
     VertexCount {

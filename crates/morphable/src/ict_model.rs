@@ -4,7 +4,8 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use crate::obj_positions::read_obj_positions;
+use visage_mesh::io::{read_obj_with, ObjReadOptions};
+
 use crate::{MorphableError, CM_TO_M};
 
 /// Number of landmark vertices (the 68 Multi-PIE / iBUG points).
@@ -103,21 +104,17 @@ impl IctModel {
     pub fn load_with(dir: &Path, options: &ImportOptions) -> Result<IctModel, MorphableError> {
         let dir = model_folder(dir)?;
         let neutral_path = dir.join(NEUTRAL_FILE);
-        let obj = read_obj_positions(&neutral_path, true)?;
+        // Positions and fanned polygons with the file's vertex numbering (no UV-seam copies).
+        let obj = read_obj_with(&neutral_path, &ObjReadOptions::POSITIONS_AND_FACES)?;
         let neutral: Vec<[f64; 3]> = obj
-            .positions
+            .mesh
+            .vertices
             .iter()
             .map(|p| p.map(|c| c * CM_TO_M))
             .collect();
         let n = neutral.len();
-        let mut triangles = Vec::with_capacity(2 * obj.polygons.len());
-        let mut triangle_polygon = Vec::with_capacity(2 * obj.polygons.len());
-        for (f, polygon) in obj.polygons.iter().enumerate() {
-            for i in 1..polygon.len() - 1 {
-                triangles.push([polygon[0], polygon[i], polygon[i + 1]]);
-                triangle_polygon.push(f as u32);
-            }
-        }
+        let triangles = obj.mesh.triangles;
+        let triangle_polygon = obj.triangle_face;
 
         let indices_path = dir.join(INDICES_FILE);
         if !indices_path.is_file() {
@@ -185,16 +182,17 @@ impl IctModel {
         };
         let read_mode = |name: &String| -> Result<Vec<[f64; 3]>, MorphableError> {
             let path = dir.join(format!("{name}.obj"));
-            let mesh = read_obj_positions(&path, false)?;
-            if mesh.positions.len() != n {
+            let positions = read_obj_with(&path, &ObjReadOptions::POSITIONS)?
+                .mesh
+                .vertices;
+            if positions.len() != n {
                 return Err(MorphableError::VertexCount {
                     path,
                     expected: n,
-                    got: mesh.positions.len(),
+                    got: positions.len(),
                 });
             }
-            Ok(mesh
-                .positions
+            Ok(positions
                 .iter()
                 .zip(&neutral)
                 .map(|(p, q)| std::array::from_fn(|c| p[c] * CM_TO_M - q[c]))

@@ -10,16 +10,16 @@
 //! - **Model frame**: the ICT frame — x to the subject's left as seen from the front (image
 //!   right), y up, the face looking along +z.
 //! - **Vertex numbering**: vertex `i` is the `i`-th `v` line of the OBJ files (no UV-seam
-//!   copies), so landmark indices and region ranges index positions directly.
+//!   copies: the files are read with `visage_mesh::io::read_obj_with` and
+//!   `ObjReadOptions::POSITIONS_AND_FACES`), so landmark indices and region ranges index
+//!   positions directly.
 //! - **Triangles**: every polygon `(v0, …, vn)` becomes the fan `(v0, vi, vi+1)`; quads give
 //!   two triangles with the file's orientation.
 
 mod error;
 mod ict_model;
-mod obj_positions;
 mod regions;
 
 pub use error::MorphableError;
 pub use ict_model::{IctModel, ImportOptions, LANDMARK_COUNT};
-pub use obj_positions::{read_obj_positions, ObjPositions};
 pub use regions::{Region, CM_TO_M, SOLID_SURFACE_END};

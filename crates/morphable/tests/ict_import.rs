@@ -1,8 +1,9 @@
 //! Import of the ICT-FaceKit subset in ../shared: counts, units, modes, landmarks, the repository
-//! layout, and errors that name the file.
+//! layout, a full-size checkout (100 identities), and errors that name the file.
 
 use std::path::{Path, PathBuf};
 
+use visage_mesh::io::{read_obj_with, ObjReadOptions};
 use visage_morphable::{IctModel, ImportOptions, MorphableError, Region, LANDMARK_COUNT};
 
 fn shared_model() -> Option<PathBuf> {
@@ -66,8 +67,9 @@ fn imports_the_shared_subset_in_metres_with_triangulated_quads() {
     model.shape(&[0.0, 0.0], &[0.0, 0.0], &mut s).unwrap();
     assert_eq!(s, model.neutral);
     model.shape(&[0.0, 0.0], &[1.0, 0.0], &mut s).unwrap();
-    let file = visage_morphable::read_obj_positions(&dir.join("jawOpen.obj"), false).unwrap();
-    for (p, q) in s.iter().zip(&file.positions) {
+    let file = read_obj_with(&dir.join("jawOpen.obj"), &ObjReadOptions::POSITIONS).unwrap();
+    assert_eq!(file.mesh.vertices.len(), s.len());
+    for (p, q) in s.iter().zip(&file.mesh.vertices) {
         for c in 0..3 {
             assert!((p[c] - q[c] * 0.01).abs() < 1e-12);
         }
@@ -81,18 +83,138 @@ fn imports_the_shared_subset_in_metres_with_triangulated_quads() {
     ));
 }
 
+/// Stems of the `.obj` files in `dir` other than the neutral mesh, sorted.
+fn mode_files(dir: &Path) -> Vec<String> {
+    let mut stems: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter_map(|name| name.strip_suffix(".obj").map(str::to_owned))
+        .filter(|stem| stem != "generic_neutral_mesh")
+        .collect();
+    stems.sort();
+    stems
+}
+
+/// The `expressions` list of `dir/vertex_indices.json`.
+fn listed_expressions(dir: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(dir.join("vertex_indices.json")).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    json["expressions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e.as_str().unwrap().to_owned())
+        .collect()
+}
+
 #[test]
 fn default_import_takes_every_present_file_in_listed_order() {
     let Some(dir) = shared_model() else { return };
     let model = IctModel::load(&dir).unwrap();
-    assert_eq!(model.identity_modes.len(), 10);
-    assert_eq!(model.expression_modes.len(), 16);
+
+    // What the folder holds: identityNNN.obj files, and expression files listed in
+    // vertex_indices.json or not.
+    let files = mode_files(&dir);
+    let identity_files: Vec<&String> = files.iter().filter(|f| f.starts_with("identity")).collect();
+    let listed = listed_expressions(&dir);
+    let present: Vec<String> = listed
+        .iter()
+        .filter(|e| files.contains(e))
+        .cloned()
+        .collect();
+    let unlisted: Vec<String> = files
+        .iter()
+        .filter(|f| !f.starts_with("identity") && !listed.contains(f))
+        .cloned()
+        .collect();
+
+    // Every identity file is imported, numbered without a gap from 000.
+    let numbered: Vec<String> = (0..identity_files.len())
+        .map(|i| format!("identity{i:03}"))
+        .collect();
+    assert_eq!(model.identity_names, numbered);
+    assert_eq!(identity_files, numbered.iter().collect::<Vec<_>>());
+    assert_eq!(model.identity_modes.len(), identity_files.len());
+    // Every listed expression with a file, in the listed order; unlisted files only on request.
+    assert_eq!(model.expression_names, present);
+    assert_eq!(model.expression_modes.len(), present.len());
+    let n = model.vertex_count();
+    assert!(model
+        .identity_modes
+        .iter()
+        .chain(&model.expression_modes)
+        .all(|m| m.len() == n));
+
+    // The numbers ../shared/data/ict-facekit/SOURCE.md documents: identities 000–029, all 53
+    // listed expressions, and the four shapes the repository ships without listing them.
+    assert_eq!(model.identity_modes.len(), 30);
+    assert_eq!(listed.len(), 53);
+    assert_eq!(model.expression_modes.len(), 53);
+    assert_eq!(
+        unlisted,
+        [
+            "PupilDilate_L",
+            "PupilDilate_R",
+            "cheekRaiser_L",
+            "cheekRaiser_R"
+        ]
+    );
     assert_eq!(
         model
             .expression_index("jawOpen")
             .map(|i| model.expression_names[i].as_str()),
         Some("jawOpen")
     );
+
+    let extra = IctModel::load_with(
+        &dir,
+        &ImportOptions {
+            max_identities: Some(0),
+            expressions: Some(unlisted.clone()),
+        },
+    )
+    .unwrap();
+    assert!(extra.identity_modes.is_empty());
+    assert_eq!(extra.expression_names, unlisted);
+}
+
+/// A full checkout has 100 identities (and may have more expressions): nothing caps the counts.
+/// Built from tiny meshes in the checkout layout.
+#[test]
+fn imports_a_full_size_checkout_of_tiny_meshes() {
+    let root = tempfile::tempdir().unwrap();
+    let dir = root.path().join("FaceXModel");
+    std::fs::create_dir(&dir).unwrap();
+    let mesh = |dx: f64| format!("v {dx} 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 4 3\n");
+    std::fs::write(dir.join("generic_neutral_mesh.obj"), mesh(0.0)).unwrap();
+    for i in 0..100 {
+        std::fs::write(dir.join(format!("identity{i:03}.obj")), mesh(i as f64)).unwrap();
+    }
+    let expressions: Vec<String> = (0..60).map(|j| format!("shape{j}")).collect();
+    for name in &expressions {
+        std::fs::write(dir.join(format!("{name}.obj")), mesh(-1.0)).unwrap();
+    }
+    let landmarks: Vec<u32> = (0..68).map(|i| i % 4).collect();
+    let json = serde_json::json!({"expressions": expressions, "idx_to_landmark_verts": landmarks});
+    std::fs::write(dir.join("vertex_indices.json"), json.to_string()).unwrap();
+
+    let model = IctModel::load(root.path()).unwrap();
+    assert_eq!(model.identity_modes.len(), 100);
+    assert_eq!(model.identity_names[99], "identity099");
+    assert!(
+        (model.identity_modes[99][0][0] - 0.99).abs() < 1e-12,
+        "cm → m"
+    );
+    assert_eq!(model.expression_names, expressions);
+    let capped = IctModel::load_with(
+        root.path(),
+        &ImportOptions {
+            max_identities: Some(40),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(capped.identity_modes.len(), 40);
 }
 
 /// A checkout of the repository has the model in `FaceXModel/`: the importer accepts the

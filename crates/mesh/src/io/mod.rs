@@ -1,17 +1,16 @@
 //! Mesh readers and writers (PLY, OBJ) shared by every stage of visage.
 //!
 //! Both formats keep positions in the file's units (visage writes metres in camera
-//! coordinates); colours in files are sRGB-encoded, in [`crate::TriMesh`] linear. Errors name the
+//! coordinates); colours in files are sRGB-encoded, in [`crate::TriMesh`] linear ([`crate::color`]). Errors name the
 //! file and the offending line (OBJ, PLY header, ASCII PLY) or element (binary PLY); malformed
 //! input never panics.
 
-mod color;
 mod error;
 mod obj;
 mod ply;
 
 pub use error::MeshIoError;
-pub use obj::{read_obj, write_obj};
+pub use obj::{read_obj, read_obj_with, write_obj, ObjMesh, ObjReadOptions};
 pub use ply::{read_ply, write_ply, write_ply_with, PlyFormat, MAX_POLYGON_CORNERS};
 
 use std::path::Path;

@@ -9,25 +9,85 @@
 //! the file stays vertex `i` of the mesh (so blendshapes and landmark indices keep working) and
 //! takes the UV/normal of its first corner; a corner that pairs it with a *different* UV or
 //! normal (a texture seam) gets a copy of the vertex appended after the file's vertices.
-//! UVs (normals) are kept only when every corner has one.
+//! UVs (normals) are kept only when every corner has one. [`read_obj_with`] can skip attributes
+//! ([`ObjReadOptions::attributes`]): then no seam copies are made and the mesh has exactly the
+//! file's vertices, which is what blendshape models (one `v` numbering shared by many files)
+//! need.
 
 use std::collections::HashMap;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
-use super::color::{linear_to_srgb, srgb_to_linear};
 use super::MeshIoError;
+use crate::color::{linear_to_srgb, srgb_to_linear};
 use crate::TriMesh;
+
+/// What [`read_obj_with`] reads; the default reads everything, as [`read_obj`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ObjReadOptions {
+    /// Read texture coordinates, normals and vertex colours, copying a vertex at every UV or
+    /// normal seam (default `true`). With `false` only positions are read: `vt`/`vn` statements,
+    /// colours and the texture/normal indices of face corners are skipped, so the mesh has
+    /// exactly the file's vertices and every corner keeps its position index.
+    pub attributes: bool,
+    /// Read the `f` statements (default `true`). With `false` the mesh has no triangles (e.g.
+    /// blendshape targets that repeat a topology read from another file).
+    pub faces: bool,
+}
+
+impl Default for ObjReadOptions {
+    fn default() -> Self {
+        ObjReadOptions {
+            attributes: true,
+            faces: true,
+        }
+    }
+}
+
+impl ObjReadOptions {
+    /// Positions and faces only: vertex `i` is the `i`-th `v` line, no seam copies.
+    pub const POSITIONS_AND_FACES: ObjReadOptions = ObjReadOptions {
+        attributes: false,
+        faces: true,
+    };
+    /// Positions only (no faces, no attributes).
+    pub const POSITIONS: ObjReadOptions = ObjReadOptions {
+        attributes: false,
+        faces: false,
+    };
+}
+
+/// An OBJ file as read by [`read_obj_with`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ObjMesh {
+    /// The mesh (positions in file units).
+    pub mesh: TriMesh,
+    /// For each triangle of `mesh`, the `f` statement it was fanned from (0-based, file order).
+    pub triangle_face: Vec<u32>,
+}
 
 /// One face corner: position, UV and normal indices (0-based, resolved).
 type Corner = (usize, Option<usize>, Option<usize>);
 
-/// Reads an OBJ mesh.
+/// Most values a `v` line may carry (`x y z w r g b` is 7); more are counted, not stored.
+const MAX_VALUES: usize = 7;
+
+/// Reads an OBJ mesh: positions, vertex colours, texture coordinates, normals and faces (see the
+/// module documentation for seams).
 ///
 /// # Errors
 /// Unreadable file; a malformed number, a non-finite coordinate, an index of zero or out of
 /// range, a face with fewer than three corners — each named by file and line (1-based).
 pub fn read_obj(path: &Path) -> Result<TriMesh, MeshIoError> {
+    read_obj_with(path, &ObjReadOptions::default()).map(|obj| obj.mesh)
+}
+
+/// Reads an OBJ file with `options` (e.g. [`ObjReadOptions::POSITIONS_AND_FACES`] to keep the
+/// file's vertex numbering exactly), and records which `f` statement each triangle came from.
+///
+/// # Errors
+/// As [`read_obj`], for the statements that `options` reads.
+pub fn read_obj_with(path: &Path, options: &ObjReadOptions) -> Result<ObjMesh, MeshIoError> {
     let text = std::fs::read(path).map_err(|source| MeshIoError::Io {
         path: path.to_owned(),
         source,
@@ -42,35 +102,51 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, MeshIoError> {
     let mut colors: Vec<[f32; 3]> = Vec::new();
     let mut uvs: Vec<[f64; 2]> = Vec::new();
     let mut normals: Vec<[f64; 3]> = Vec::new();
-    // Faces: (line, corners); positive indices are checked at the end (forward references).
-    let mut faces: Vec<(usize, Vec<Corner>)> = Vec::new();
+    // Faces, flat: the corners of face k are `corners[face_start[k]..face_start[k + 1]]`;
+    // positive indices are checked at the end (forward references).
+    let mut corners: Vec<Corner> = Vec::new();
+    let mut face_start: Vec<usize> = vec![0];
+    let mut face_line: Vec<usize> = Vec::new();
+    // Parses the remaining words as numbers into `buf`; returns how many there were.
+    let numbers = |words: std::str::SplitAsciiWhitespace<'_>,
+                   line_no: usize,
+                   buf: &mut [f64; MAX_VALUES]|
+     -> Result<usize, MeshIoError> {
+        let mut n = 0;
+        for w in words {
+            let x = w
+                .parse::<f64>()
+                .map_err(|_| syntax(line_no, format!("{w:?} is not a number")))?;
+            if let Some(slot) = buf.get_mut(n) {
+                *slot = x;
+            }
+            n += 1;
+        }
+        Ok(n)
+    };
+    let mut buf = [0.0; MAX_VALUES];
     for (i, raw) in text.lines().enumerate() {
         let line_no = i + 1;
-        let line = raw.split('#').next().unwrap_or("");
+        let line = match raw.find('#') {
+            Some(end) => &raw[..end],
+            None => raw,
+        };
         let mut words = line.split_ascii_whitespace();
         let Some(keyword) = words.next() else {
             continue;
         };
-        let numbers = |words: std::str::SplitAsciiWhitespace<'_>| -> Result<Vec<f64>, MeshIoError> {
-            words
-                .map(|w| {
-                    w.parse::<f64>()
-                        .map_err(|_| syntax(line_no, format!("{w:?} is not a number")))
-                })
-                .collect()
-        };
         match keyword {
             "v" => {
-                let v = numbers(words)?;
-                if v.len() != 3 && v.len() != 4 && v.len() != 6 && v.len() != 7 {
+                let n = numbers(words, line_no, &mut buf)?;
+                if n != 3 && n != 4 && n != 6 && n != 7 {
                     return Err(syntax(
                         line_no,
                         format!(
-                            "a vertex needs 3 coordinates (+ optional w or r g b), found {} values",
-                            v.len()
+                            "a vertex needs 3 coordinates (+ optional w or r g b), found {n} values"
                         ),
                     ));
                 }
+                let v = &buf[..n];
                 if !v.iter().all(|x| x.is_finite()) {
                     return Err(syntax(
                         line_no,
@@ -81,25 +157,27 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, MeshIoError> {
                     ));
                 }
                 positions.push([v[0], v[1], v[2]]);
-                if v.len() >= 6 {
-                    let c = &v[v.len() - 3..];
+                if n >= 6 && options.attributes {
+                    let c = &v[n - 3..];
                     colors
                         .push([c[0], c[1], c[2]].map(|x| srgb_to_linear(x.clamp(0.0, 1.0) as f32)));
                 }
             }
-            "vt" => {
-                let v = numbers(words)?;
-                if !(1..=3).contains(&v.len()) || !v.iter().all(|x| x.is_finite()) {
+            "vt" if options.attributes => {
+                let n = numbers(words, line_no, &mut buf)?;
+                let v = &buf[..n.min(MAX_VALUES)];
+                if !(1..=3).contains(&n) || !v.iter().all(|x| x.is_finite()) {
                     return Err(syntax(
                         line_no,
                         format!("a texture coordinate needs 1–3 finite values, found {v:?}"),
                     ));
                 }
-                uvs.push([v[0], v.get(1).copied().unwrap_or(0.0)]);
+                uvs.push([v[0], if n > 1 { v[1] } else { 0.0 }]);
             }
-            "vn" => {
-                let v = numbers(words)?;
-                if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
+            "vn" if options.attributes => {
+                let n = numbers(words, line_no, &mut buf)?;
+                let v = &buf[..n.min(MAX_VALUES)];
+                if n != 3 || !v.iter().all(|x| x.is_finite()) {
                     return Err(syntax(
                         line_no,
                         format!("a normal needs 3 finite values, found {v:?}"),
@@ -107,8 +185,8 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, MeshIoError> {
                 }
                 normals.push([v[0], v[1], v[2]]);
             }
-            "f" => {
-                let mut corners = Vec::new();
+            "f" if options.faces => {
+                let first = corners.len();
                 for w in words {
                     let mut parts = w.split('/');
                     let mut index = |what: &str,
@@ -145,17 +223,25 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, MeshIoError> {
                         }
                     };
                     let v = index("vertex", positions.len(), true)?.unwrap_or(0);
-                    let vt = index("texture", uvs.len(), false)?;
-                    let vn = index("normal", normals.len(), false)?;
+                    let (vt, vn) = if options.attributes {
+                        (
+                            index("texture", uvs.len(), false)?,
+                            index("normal", normals.len(), false)?,
+                        )
+                    } else {
+                        (None, None)
+                    };
                     corners.push((v, vt, vn));
                 }
-                if corners.len() < 3 {
+                let count = corners.len() - first;
+                if count < 3 {
                     return Err(syntax(
                         line_no,
-                        format!("a face needs 3 or more corners, found {}", corners.len()),
+                        format!("a face needs 3 or more corners, found {count}"),
                     ));
                 }
-                faces.push((line_no, corners));
+                face_start.push(corners.len());
+                face_line.push(line_no);
             }
             _ => {}
         }
@@ -164,11 +250,17 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, MeshIoError> {
         // Colours on some vertices only: keep none rather than guess.
         colors.clear();
     }
-    for (line, corners) in &faces {
-        for &(v, vt, vn) in corners {
+    let faces = || {
+        face_start
+            .windows(2)
+            .zip(&face_line)
+            .map(|(r, &line)| (line, &corners[r[0]..r[1]]))
+    };
+    for (line, face) in faces() {
+        for &(v, vt, vn) in face {
             if v >= positions.len() {
                 return Err(syntax(
-                    *line,
+                    line,
                     format!(
                         "vertex index {} is out of range (the file has {} vertices)",
                         v + 1,
@@ -178,7 +270,7 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, MeshIoError> {
             }
             if let Some(t) = vt.filter(|&t| t >= uvs.len()) {
                 return Err(syntax(
-                    *line,
+                    line,
                     format!(
                         "texture index {} is out of range (the file has {} texture coordinates)",
                         t + 1,
@@ -188,7 +280,7 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, MeshIoError> {
             }
             if let Some(n) = vn.filter(|&n| n >= normals.len()) {
                 return Err(syntax(
-                    *line,
+                    line,
                     format!(
                         "normal index {} is out of range (the file has {} normals)",
                         n + 1,
@@ -198,8 +290,8 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, MeshIoError> {
             }
         }
     }
-    let all_uv = !faces.is_empty() && faces.iter().all(|(_, c)| c.iter().all(|k| k.1.is_some()));
-    let all_n = !faces.is_empty() && faces.iter().all(|(_, c)| c.iter().all(|k| k.2.is_some()));
+    let all_uv = !corners.is_empty() && corners.iter().all(|k| k.1.is_some());
+    let all_n = !corners.is_empty() && corners.iter().all(|k| k.2.is_some());
 
     let nv = positions.len();
     let mut mesh = TriMesh {
@@ -213,50 +305,70 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, MeshIoError> {
     if all_n {
         mesh.normals = vec![[0.0; 3]; nv];
     }
-    // The (uv, normal) pair each file vertex took first, and seam copies by full key.
-    let mut first: Vec<Option<(Option<usize>, Option<usize>)>> = vec![None; nv];
-    let mut copies: HashMap<Corner, u32> = HashMap::new();
-    for (_, corners) in &faces {
-        let mut idx = Vec::with_capacity(corners.len());
-        for &(v, vt, vn) in corners {
-            let key = (
-                if all_uv { vt } else { None },
-                if all_n { vn } else { None },
-            );
-            let out = match first[v] {
-                None => {
-                    first[v] = Some(key);
-                    if let Some(t) = key.0 {
-                        mesh.uvs[v] = uvs[t];
-                    }
-                    if let Some(n) = key.1 {
-                        mesh.normals[v] = normals[n];
-                    }
-                    v as u32
-                }
-                Some(k) if k == key => v as u32,
-                Some(_) => *copies.entry((v, key.0, key.1)).or_insert_with(|| {
-                    let new = mesh.vertices.len() as u32;
-                    mesh.vertices.push(mesh.vertices[v]);
-                    if !mesh.colors.is_empty() {
-                        mesh.colors.push(mesh.colors[v]);
-                    }
-                    if let Some(t) = key.0 {
-                        mesh.uvs.push(uvs[t]);
-                    }
-                    if let Some(n) = key.1 {
-                        mesh.normals.push(normals[n]);
-                    }
-                    new
-                }),
-            };
-            idx.push(out);
+    let triangle_count = corners.len() - 2 * face_line.len();
+    mesh.triangles.reserve(triangle_count);
+    let mut triangle_face = Vec::with_capacity(triangle_count);
+    if !all_uv && !all_n {
+        // No per-corner attribute is kept, so there are no seams: corners index positions.
+        for (f, (_, face)) in faces().enumerate() {
+            let v0 = face[0].0 as u32;
+            for pair in face[1..].windows(2) {
+                mesh.triangles
+                    .push([v0, pair[0].0 as u32, pair[1].0 as u32]);
+                triangle_face.push(f as u32);
+            }
         }
-        for i in 1..idx.len() - 1 {
-            mesh.triangles.push([idx[0], idx[i], idx[i + 1]]);
+    } else {
+        // The (uv, normal) pair each file vertex took first, and seam copies by full key.
+        let mut first: Vec<Option<(Option<usize>, Option<usize>)>> = vec![None; nv];
+        let mut copies: HashMap<Corner, u32> = HashMap::new();
+        let mut idx = Vec::new();
+        for (f, (_, face)) in faces().enumerate() {
+            idx.clear();
+            for &(v, vt, vn) in face {
+                let key = (
+                    if all_uv { vt } else { None },
+                    if all_n { vn } else { None },
+                );
+                let out = match first[v] {
+                    None => {
+                        first[v] = Some(key);
+                        if let Some(t) = key.0 {
+                            mesh.uvs[v] = uvs[t];
+                        }
+                        if let Some(n) = key.1 {
+                            mesh.normals[v] = normals[n];
+                        }
+                        v as u32
+                    }
+                    Some(k) if k == key => v as u32,
+                    Some(_) => *copies.entry((v, key.0, key.1)).or_insert_with(|| {
+                        let new = mesh.vertices.len() as u32;
+                        mesh.vertices.push(mesh.vertices[v]);
+                        if !mesh.colors.is_empty() {
+                            mesh.colors.push(mesh.colors[v]);
+                        }
+                        if let Some(t) = key.0 {
+                            mesh.uvs.push(uvs[t]);
+                        }
+                        if let Some(n) = key.1 {
+                            mesh.normals.push(normals[n]);
+                        }
+                        new
+                    }),
+                };
+                idx.push(out);
+            }
+            for i in 1..idx.len() - 1 {
+                mesh.triangles.push([idx[0], idx[i], idx[i + 1]]);
+                triangle_face.push(f as u32);
+            }
         }
     }
-    Ok(mesh)
+    Ok(ObjMesh {
+        mesh,
+        triangle_face,
+    })
 }
 
 /// Writes `mesh` as OBJ: `v x y z [r g b]` (sRGB colours when present), `vt` and `vn` per vertex
@@ -432,5 +544,65 @@ mod tests {
         // Every appended vertex is a copy of a file vertex (a UV seam).
         let extra = &m.vertices[26_719..];
         assert!(extra.iter().all(|p| m.vertices[..26_719].contains(p)));
+
+        // Positions only: exactly the file's vertices, the same triangles up to seam copies.
+        let p = read_obj_with(&path, &ObjReadOptions::POSITIONS_AND_FACES).unwrap();
+        assert_eq!(p.mesh.vertices, m.vertices[..26_719]);
+        assert!(p.mesh.uvs.is_empty() && p.mesh.normals.is_empty());
+        assert_eq!(p.mesh.triangles.len(), m.triangles.len());
+        for (a, b) in p.mesh.triangles.iter().zip(&m.triangles) {
+            assert_eq!(
+                a.map(|i| p.mesh.vertices[i as usize]),
+                b.map(|i| m.vertices[i as usize])
+            );
+        }
+        assert_eq!(p.triangle_face.len(), p.mesh.triangles.len());
+        assert_eq!(p.triangle_face.last(), Some(&26_383));
+    }
+
+    #[test]
+    fn positions_only_keeps_the_file_numbering_and_records_faces() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.obj");
+        let text = "v 0 0 0 1 0 0\nv 1 0 0 1 0 0\nvt 0 0\nvt 1 1\nv 1 1 0 1 0 0\nv 0 1 0 1 0 0\n\
+                    vn 0 0 1\nf 1/1/1 2/2/1 3/1/1 4/2/1\nf -4/2 -3/1 -1/2\n";
+        std::fs::write(&path, text).unwrap();
+        let full = read_obj_with(&path, &ObjReadOptions::default()).unwrap();
+        assert_eq!(full.mesh, read_obj(&path).unwrap());
+        assert!(full.mesh.vertices.len() > 4, "seam copies with attributes");
+        assert_eq!(full.triangle_face, [0, 0, 1]);
+
+        let p = read_obj_with(&path, &ObjReadOptions::POSITIONS_AND_FACES).unwrap();
+        assert_eq!(p.mesh.vertices.len(), 4);
+        assert_eq!(p.mesh.triangles, [[0, 1, 2], [0, 2, 3], [0, 1, 3]]);
+        assert_eq!(p.triangle_face, [0, 0, 1]);
+        assert!(p.mesh.uvs.is_empty() && p.mesh.normals.is_empty() && p.mesh.colors.is_empty());
+
+        let v = read_obj_with(&path, &ObjReadOptions::POSITIONS).unwrap();
+        assert_eq!(v.mesh.vertices, p.mesh.vertices);
+        assert!(v.mesh.triangles.is_empty() && v.triangle_face.is_empty());
+
+        // Skipped statements are not checked; read ones still are, with file and line.
+        std::fs::write(
+            &path,
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt x\nf 1/9 2/9 3/9\nf 1 2 5\n",
+        )
+        .unwrap();
+        let e = read_obj_with(&path, &ObjReadOptions::POSITIONS_AND_FACES)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("p.obj:6:") && e.contains("vertex index 5"),
+            "{e}"
+        );
+        assert_eq!(
+            read_obj_with(&path, &ObjReadOptions::POSITIONS)
+                .unwrap()
+                .mesh
+                .vertices
+                .len(),
+            3
+        );
+        assert!(read_obj(&path).is_err());
     }
 }
