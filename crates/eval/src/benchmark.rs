@@ -5,11 +5,11 @@ use std::collections::BTreeMap;
 use visage_camera::{DepthKind, DepthMap};
 use visage_face::CanonicalMesh;
 use visage_fem::{ClipOptions, Weights};
-use visage_mesh::Mask;
-use visage_morphable::{IctModel, ImportOptions};
-use visage_pipeline::{
+use visage_fusion::{
     FaceDomain, FusionSetup, MeshingOptions, DEFAULT_MAX_DEPTH_M, DOMAIN_MAJORITY,
 };
+use visage_mesh::Mask;
+use visage_morphable::{IctModel, ImportOptions};
 
 use crate::canonical_correspondence::CanonicalCorrespondence;
 use crate::method::{AnchoredInput, Method, MethodInput, MethodRun, VertexKind};
@@ -31,7 +31,7 @@ const TRACKER_SALT: u64 = 0x7_2ac4_e5ee_d000;
 /// pipeline's default for depth maps, the best RMSE of a λ × μ sweep on a separate seed
 /// (ARCHITECTURE.md, benchmark section). Not `Weights::default()`, which is the image-plane
 /// fusion's (λ in reference pixels⁴).
-pub const ANCHORED_WEIGHTS: Weights = visage_pipeline::ANCHORED_WEIGHTS_MAP;
+pub const ANCHORED_WEIGHTS: Weights = visage_fusion::ANCHORED_WEIGHTS_MAP;
 /// Subdivision of the canonical FaceMesh for the face-anchored mesh in the benchmark.
 pub const ANCHORED_SUBDIVISION: usize = 2;
 /// Fewest domain pixels a sequence must leave to be meshed.

@@ -12,7 +12,7 @@ pub enum EvalError {
     #[error("rendering: {0}")]
     Render(#[from] visage_render::RenderError),
     #[error("fusion: {0}")]
-    Pipeline(#[from] visage_pipeline::PipelineError),
+    Fusion(#[from] visage_fusion::FusionError),
     #[error("solver: {0}")]
     Fem(#[from] visage_fem::FemError),
     /// A configuration value outside its documented range.

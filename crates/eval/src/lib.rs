@@ -42,7 +42,7 @@ pub use metrics::{
 };
 pub use noise::{NoiseGenerator, NoiseModel, NOISE_PRESETS};
 pub use normal::standard_normal;
-pub use report::{csv, table, write_results, write_sweep};
+pub use report::{csv, sweep_table, table, write_results, write_sweep};
 pub use simulated_tracker::{simulate_tracking, TrackedSequence, TrackerNoise};
 pub use svg_plot::{heatmap_svg, line_chart_svg, Series};
 pub use synthesis::{

@@ -1,6 +1,6 @@
-//! The methods compared by the benchmark (issue #5, item 4). Each is a function of the same
+//! The methods compared by the benchmark. Each is a function of the same
 //! input — the noisy depth sequence, the camera, the sequence's meshing domain and, for the
-//! face-anchored methods (issue #6), the simulated tracker's landmarks and poses — and returns
+//! face-anchored methods, the simulated tracker's landmarks and poses — and returns
 //! one vertex field per frame (#V × 3, metres, camera coordinates) on its [`VertexKind`]: the
 //! image-plane mesh shared by the paper's methods, or the face-anchored mesh. Adding a method
 //! is a variant here and a line in [`Method::run`].
@@ -10,11 +10,11 @@ use std::time::Instant;
 use faer::Mat;
 use visage_camera::{DepthMap, Intrinsics};
 use visage_fem::{solve_clip, ClipOptions, FusionSystem, Weights};
-use visage_mesh::Mask;
-use visage_pipeline::{
-    AnchoredFrame, AnchoredFuser, FaceDomain, FrameDepth, FrameStatus, Fuser, FusionSetup,
-    MeshingOptions,
+use visage_fusion::{
+    AnchoredFrame, AnchoredFuser, FaceDomain, FrameDepth, FrameStatus, FusionSetup,
+    ImagePlaneFuser, MeshingOptions, SurfaceFuser,
 };
+use visage_mesh::Mask;
 
 use crate::simulated_tracker::TrackedSequence;
 use crate::taubin::taubin_smooth;
@@ -34,8 +34,8 @@ pub enum Method {
     Clip,
     /// [`Method::Raw`] followed by Taubin λ|μ smoothing with this many iterations.
     Taubin { iterations: usize },
-    /// The face-anchored, pose-compensated streaming fusion (issue #6,
-    /// [`visage_pipeline::AnchoredFuser`]) on the depth sampled at the tracked vertices.
+    /// The face-anchored, pose-compensated streaming fusion
+    /// ([`visage_fusion::AnchoredFuser`]) on the depth sampled at the tracked vertices.
     FaceAnchored,
     /// Its whole-clip minimiser: [`visage_fem::solve_clip`] on the head-coordinate right-hand
     /// sides of the frames, from the streaming solutions.
@@ -180,12 +180,12 @@ fn fused(
 ) -> Result<MethodRun, EvalError> {
     let n = setup.vertex_count();
     let system = FusionSystem::new(setup.ops.clone(), weights)?;
-    let mut fuser = Fuser::new(setup, system, input.max_depth_m);
+    let mut fuser = ImagePlaneFuser::new(setup, system, input.max_depth_m);
     let mut solutions = Vec::with_capacity(input.frames.len());
     let (mut bs, mut members) = (Vec::new(), Vec::new());
     let start = Instant::now();
     for (index, depth) in input.frames.iter().enumerate() {
-        let r = fuser.process(depth);
+        let r = fuser.process(depth)?;
         match r.status {
             FrameStatus::NoData => solutions.push(
                 solutions
@@ -194,9 +194,9 @@ fn fused(
                     .unwrap_or_else(|| Mat::zeros(n, 3)),
             ),
             FrameStatus::Solved | FrameStatus::Carried => {
-                solutions.push(fuser.solution().to_owned());
+                solutions.push(to_mat(fuser.solution()));
                 if clip.is_some() {
-                    bs.push(fuser.rhs().to_owned());
+                    bs.push(fuser.clip_state().b);
                     members.push(index);
                 }
             }
@@ -204,7 +204,7 @@ fn fused(
     }
     if let Some(options) = clip {
         let mut xs: Vec<Mat<f64>> = members.iter().map(|&i| solutions[i].clone()).collect();
-        solve_clip(fuser.solver_mut().system_mut(), &bs, &mut xs, options);
+        solve_clip(fuser.system_mut(), &bs, &mut xs, options);
         for (x, &i) in xs.into_iter().zip(&members) {
             solutions[i] = x;
         }
@@ -257,14 +257,15 @@ fn face_anchored(
         solutions.push(to_mat(fuser.solution()));
         raw.push(to_mat(fuser.raw()));
         if clip.is_some() && r.status == FrameStatus::Solved {
-            bs.push(fuser.rhs().to_owned());
-            xs.push(fuser.solution_head().to_owned());
-            poses.push(*fuser.pose());
+            let state = fuser.clip_state();
+            bs.push(state.b);
+            xs.push(state.x);
+            poses.push(state.pose);
             members.push(index);
         }
     }
     if let Some(options) = clip {
-        solve_clip(fuser.solver_mut().system_mut(), &bs, &mut xs, options);
+        solve_clip(fuser.system_mut(), &bs, &mut xs, options);
         for ((x, &i), pose) in xs.iter().zip(&members).zip(&poses) {
             fuser.set_solution_head(x, *pose);
             solutions[i] = to_mat(fuser.solution());

@@ -33,7 +33,7 @@
 
 use faer::Mat;
 use visage_fem::SurfaceMetrics;
-use visage_pipeline::{to_positions, FaceDomain, FusionSetup};
+use visage_fusion::{to_positions, FaceDomain, FusionSetup};
 
 use crate::point_to_mesh::TriangleGrid;
 use crate::synthesis::SyntheticSequence;

@@ -83,6 +83,22 @@ pub fn csv(results: &BenchmarkResults) -> String {
     s
 }
 
+/// The sweep as a fixed-width text table, one line per (λ, μ).
+pub fn sweep_table(points: &[SweepPoint]) -> String {
+    let mut s = format!(
+        "{:>8} {:>8} {:>9} {:>10} {:>6}\n",
+        "lambda", "mu", "rmse_mm", "jitter_mm", "lag"
+    );
+    for p in points {
+        let _ = writeln!(
+            s,
+            "{:>8} {:>8} {:>9.3} {:>10.3} {:>6.2}",
+            p.lambda, p.mu, p.rmse_mm, p.jitter_mm, p.lag_frames
+        );
+    }
+    s
+}
+
 /// Writes `results.json`, `results.csv`, `error_per_frame.svg` and `jitter_per_frame.svg` into
 /// `out` (which must exist).
 pub fn write_results(results: &BenchmarkResults, out: &Path) -> Result<(), EvalError> {

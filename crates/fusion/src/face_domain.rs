@@ -1,4 +1,4 @@
-//! The face-anchored mesh (issue #6): vertices defined once on a template face surface — in
+//! The face-anchored mesh (ERRATA 16): vertices defined once on a template face surface — in
 //! visage MediaPipe's canonical FaceMesh (468 landmarks, 898 triangles) — so that each vertex is
 //! the same point of the face in every frame.
 //!
@@ -15,7 +15,7 @@ use std::collections::HashMap;
 
 use visage_mesh::edge_key;
 
-use crate::PipelineError;
+use crate::FusionError;
 
 /// Largest subdivision factor accepted (factor² sub-triangles per template triangle).
 pub const MAX_SUBDIVISION: usize = 16;
@@ -52,9 +52,9 @@ impl FaceDomain {
         vertex_count: usize,
         triangles: &[[u32; 3]],
         factor: usize,
-    ) -> Result<FaceDomain, PipelineError> {
+    ) -> Result<FaceDomain, FusionError> {
         if !(1..=MAX_SUBDIVISION).contains(&factor) {
-            return Err(PipelineError::InvalidOption {
+            return Err(FusionError::InvalidOption {
                 name: "subdivision",
                 value: factor.to_string(),
                 reason: "must be between 1 and 16",
@@ -66,7 +66,7 @@ impl FaceDomain {
                 .flatten()
                 .any(|&i| i as usize >= vertex_count)
         {
-            return Err(PipelineError::InvalidOption {
+            return Err(FusionError::InvalidOption {
                 name: "template",
                 value: format!("{} triangles over {vertex_count} vertices", triangles.len()),
                 reason: "needs triangles whose indices name template vertices",
@@ -137,7 +137,7 @@ impl FaceDomain {
             }
         }
         let Some(anchors) = anchors.into_iter().collect::<Option<Vec<Anchor>>>() else {
-            return Err(PipelineError::InvalidOption {
+            return Err(FusionError::InvalidOption {
                 name: "template",
                 value: format!("{vertex_count} vertices"),
                 reason: "every template vertex must belong to a triangle",

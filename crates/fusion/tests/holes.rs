@@ -2,8 +2,8 @@
 
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_fem::{FusionSystem, Weights};
+use visage_fusion::{FrameStatus, FusionSetup, ImagePlaneFuser, MeshingOptions, SurfaceFuser};
 use visage_mesh::Mask;
-use visage_pipeline::{FrameStatus, Fuser, FusionSetup, MeshingOptions};
 
 const W: u32 = 64;
 const H: u32 = 48;
@@ -32,20 +32,20 @@ fn in_hole(u: f64, v: f64) -> bool {
 }
 
 /// Largest |z − z_true| over the vertices inside the hole.
-fn hole_error(fuser: &Fuser) -> f64 {
+fn hole_error(fuser: &ImagePlaneFuser) -> f64 {
     let (k, x) = (fuser.setup().k, fuser.solution());
     let mut worst = 0.0f64;
     for (i, p) in fuser.setup().mesh.points.iter().enumerate() {
         if in_hole(p[0], p[1]) {
-            let z = x[(i, 2)];
-            let proj = k.project([x[(i, 0)], x[(i, 1)], z]);
+            let z = x[i][2];
+            let proj = k.project(x[i]);
             worst = worst.max((z - z_true(proj[0], proj[1])).abs());
         }
     }
     worst
 }
 
-fn fuser(first: &DepthMap) -> Fuser {
+fn fuser(first: &DepthMap) -> ImagePlaneFuser {
     let k = Intrinsics::from_fov(W, H, 60.0).unwrap();
     let setup = FusionSetup::new(
         &k,
@@ -55,17 +55,17 @@ fn fuser(first: &DepthMap) -> Fuser {
     )
     .unwrap();
     let system = FusionSystem::new(setup.ops.clone(), Weights::default()).unwrap();
-    Fuser::new(setup, system, 10.0)
+    ImagePlaneFuser::new(setup, system, 10.0)
 }
 
 #[test]
 fn a_hole_keeps_the_previous_surface() {
     let full = frame(|_, _| false);
     let mut f = fuser(&full);
-    f.process(&full);
+    f.process(&full).unwrap();
     let holed = frame(|u, v| in_hole(u as f64, v as f64));
     for _ in 0..3 {
-        let r = f.process(&holed);
+        let r = f.process(&holed).unwrap();
         assert_eq!(r.status, FrameStatus::Solved);
         assert!(r.valid_fraction < 0.99);
     }
@@ -77,7 +77,7 @@ fn a_hole_keeps_the_previous_surface() {
 fn a_hole_in_the_first_frame_is_inpainted_not_zeroed() {
     let holed = frame(|u, v| in_hole(u as f64, v as f64));
     let mut f = fuser(&holed);
-    assert_eq!(f.process(&holed).status, FrameStatus::Solved);
+    assert_eq!(f.process(&holed).unwrap().status, FrameStatus::Solved);
     let err = hole_error(&f);
     assert!(
         err < 0.02,
@@ -89,12 +89,15 @@ fn a_hole_in_the_first_frame_is_inpainted_not_zeroed() {
 fn a_frame_without_depth_is_carried_over_exactly() {
     let full = frame(|_, _| false);
     let mut f = fuser(&full);
-    f.process(&full);
+    f.process(&full).unwrap();
     let before = f.solution().to_owned();
-    let r = f.process(&frame(|_, _| true));
+    let r = f.process(&frame(|_, _| true)).unwrap();
     assert_eq!(r.status, FrameStatus::Carried);
     assert_eq!(f.solution().to_owned(), before);
     // A first frame without any depth has nothing to carry.
     let mut g = fuser(&full);
-    assert_eq!(g.process(&frame(|_, _| true)).status, FrameStatus::NoData);
+    assert_eq!(
+        g.process(&frame(|_, _| true)).unwrap().status,
+        FrameStatus::NoData
+    );
 }

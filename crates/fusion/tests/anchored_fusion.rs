@@ -8,7 +8,7 @@ use face_scene::{camera, expression, fuser, observe, pose, template};
 use faer::Mat;
 use visage_camera::{DepthKind, DepthMap};
 use visage_fem::sparse::sym_matmul;
-use visage_pipeline::{AnchoredFrame, FaceDomain, FrameDepth, FrameStatus};
+use visage_fusion::{AnchoredFrame, FaceDomain, FrameDepth, FrameStatus, SurfaceFuser};
 
 fn max_distance(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
     a.iter()
@@ -301,7 +301,7 @@ fn malformed_frames_are_refused() {
         })
         .is_err());
     let domain = FaceDomain::subdivide(v.len(), &t, 1).unwrap();
-    assert!(visage_pipeline::AnchoredFuser::new(
+    assert!(visage_fusion::AnchoredFuser::new(
         domain,
         &v[..5],
         camera(),

@@ -2,7 +2,7 @@
 //! coordinates, a camera, and head poses.
 
 use visage_camera::{Intrinsics, RigidTransform};
-use visage_pipeline::{AnchoredFuser, FaceDomain};
+use visage_fusion::{AnchoredFuser, FaceDomain};
 
 /// Grid points per side of the template.
 pub const SIDE: usize = 9;

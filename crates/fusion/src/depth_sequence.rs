@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use visage_camera::{read_depth_png, DepthKind, DepthMap};
 use visage_mesh::Mask;
 
-use crate::PipelineError;
+use crate::FusionError;
 
 /// Fraction of frames in which a pixel must have valid depth to be part of the meshing domain.
 pub const DOMAIN_MAJORITY: f64 = 0.5;
@@ -37,21 +37,21 @@ pub struct SequenceSurvey {
 
 impl DepthSequence {
     /// Lists the `*.png` files of `dir` sorted by name.
-    pub fn open(dir: &Path, scale: f64, kind: DepthKind) -> Result<Self, PipelineError> {
+    pub fn open(dir: &Path, scale: f64, kind: DepthKind) -> Result<Self, FusionError> {
         if !(scale.is_finite() && scale > 0.0) {
-            return Err(PipelineError::InvalidOption {
+            return Err(FusionError::InvalidOption {
                 name: "depth-scale",
                 value: scale.to_string(),
                 reason: "must be positive and finite",
             });
         }
-        let entries = std::fs::read_dir(dir).map_err(|source| PipelineError::Io {
+        let entries = std::fs::read_dir(dir).map_err(|source| FusionError::Io {
             path: dir.to_owned(),
             source,
         })?;
         let mut frames = Vec::new();
         for entry in entries {
-            let entry = entry.map_err(|source| PipelineError::Io {
+            let entry = entry.map_err(|source| FusionError::Io {
                 path: dir.to_owned(),
                 source,
             })?;
@@ -66,7 +66,7 @@ impl DepthSequence {
         }
         frames.sort();
         if frames.is_empty() {
-            return Err(PipelineError::NoFrames {
+            return Err(FusionError::NoFrames {
                 dir: dir.to_owned(),
             });
         }
@@ -79,14 +79,14 @@ impl DepthSequence {
     }
 
     /// Reads frame `index`.
-    pub fn read(&self, index: usize) -> Result<DepthMap, PipelineError> {
+    pub fn read(&self, index: usize) -> Result<DepthMap, FusionError> {
         Ok(read_depth_png(&self.frames[index], self.scale, self.kind)?)
     }
 
     /// Reads every frame once: checks that all are readable 16-bit PNGs of one size, and
     /// builds the domain mask and mean depth. Nothing is written, so a bad frame anywhere stops
     /// the run before any output exists.
-    pub fn survey(&self, max_depth: f64) -> Result<SequenceSurvey, PipelineError> {
+    pub fn survey(&self, max_depth: f64) -> Result<SequenceSurvey, FusionError> {
         let first = self.read(0)?;
         let (width, height) = (first.width, first.height);
         let pixels = first.data.len();
@@ -100,7 +100,7 @@ impl DepthSequence {
                 self.read(index)?
             };
             if (frame.width, frame.height) != (width, height) {
-                return Err(PipelineError::FrameSize {
+                return Err(FusionError::FrameSize {
                     path: self.frames[index].clone(),
                     width: frame.width,
                     height: frame.height,
@@ -121,7 +121,7 @@ impl DepthSequence {
             }
         }
         if empty_frames.len() == self.frames.len() {
-            return Err(PipelineError::NoValidDepth {
+            return Err(FusionError::NoValidDepth {
                 dir: self.dir.clone(),
             });
         }

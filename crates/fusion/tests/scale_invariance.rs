@@ -3,8 +3,8 @@
 use faer::Mat;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_fem::{FusionSystem, Weights};
+use visage_fusion::{FusionSetup, ImagePlaneFuser, MeshingOptions, SurfaceFuser};
 use visage_mesh::{Mask, TriangulationKind};
-use visage_pipeline::{Fuser, FusionSetup, MeshingOptions};
 
 /// Depth of a bumpy surface as a function of normalised image coordinates.
 fn z(xn: f64, yn: f64) -> f64 {
@@ -37,9 +37,10 @@ fn fuse(scale: u32, lambda: f64, unit: f64) -> (Vec<[f64; 2]>, Mat<f64>) {
         .map(|p| [(p[0] - k.cx) / f, (p[1] - k.cy) / f])
         .collect();
     let system = FusionSystem::new(setup.ops.clone(), Weights { lambda, mu: 0.0 }).unwrap();
-    let mut fuser = Fuser::new(setup, system, f64::INFINITY);
-    fuser.process(&depth);
-    (normalised, fuser.solution().to_owned())
+    let mut fuser = ImagePlaneFuser::new(setup, system, f64::INFINITY);
+    fuser.process(&depth).unwrap();
+    let x = fuser.solution();
+    (normalised, Mat::from_fn(x.len(), 3, |i, c| x[i][c]))
 }
 
 fn max_diff(a: &Mat<f64>, b: &Mat<f64>, scale_b: f64) -> f64 {

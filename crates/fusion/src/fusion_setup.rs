@@ -10,7 +10,7 @@ use visage_mesh::{
     flip_depth_aware, sample_domain, Mask, OneRing, PlanarMesh, SamplingOptions, TriangulationKind,
 };
 
-use crate::PipelineError;
+use crate::FusionError;
 
 /// Gauss–Seidel sweeps of the harmonic in-painting of a frame without predecessor.
 pub const INPAINT_SWEEPS: usize = 50;
@@ -64,7 +64,7 @@ impl FusionSetup {
         domain: &Mask,
         reference: &DepthMap,
         options: &MeshingOptions,
-    ) -> Result<Self, PipelineError> {
+    ) -> Result<Self, FusionError> {
         k.check_size(domain.width, domain.height)?;
         let sampling = SamplingOptions {
             spacing: options.spacing,

@@ -11,7 +11,7 @@ mod face_scene;
 use counting_allocator::allocations;
 use face_scene::{expression, fuser, observe, pose, template};
 use visage_fem::Factorization;
-use visage_pipeline::{AnchoredFrame, FrameDepth, FrameStatus};
+use visage_fusion::{AnchoredFrame, FrameDepth, FrameStatus, SurfaceFuser};
 
 #[test]
 fn one_factorisation_per_clip_and_no_allocation_per_frame() {

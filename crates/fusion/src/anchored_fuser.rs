@@ -1,4 +1,4 @@
-//! Face-anchored fusion with a pose-compensated temporal term (issue #6).
+//! Face-anchored fusion with a pose-compensated temporal term (ERRATA 15–18).
 //!
 //! The paper's mesh is fixed on the image plane and its temporal term `μ‖S_k − S_{k−1}‖²_M`
 //! pulls the surface towards where the face *was*. Here every vertex is a fixed point of the
@@ -8,7 +8,7 @@
 //! E(S_k) = ‖S_k − X_k‖²_M + λ (S_k − P_k)ᵀ K (S_k − P_k) + μ ‖S_k − T_k T_{k−1}⁻¹ S_{k−1}‖²_M
 //! ```
 //!
-//! with `X_k` the raw surface sampled at the vertices (data term of Eq. 2.3), `T_k` the rigid
+//! with `X_k` the raw surface sampled at the vertices (the data term, Eq. 2.2), `T_k` the rigid
 //! head pose of frame k (head → camera, from the metric face fit), `P_k = T_k C` the template
 //! `C` placed by the pose, `M` the consistent mass and `K = Lᵀ M_l⁻¹ L` the biharmonic
 //! stiffness (Eq. 2.4, ERRATA 3) of the template surface.
@@ -57,7 +57,7 @@ use visage_fem::{
     StreamingSolver, SurfaceMetrics, SurfaceQuality, Weights,
 };
 
-use crate::{FaceDomain, FrameStatus, PipelineError};
+use crate::{ClipState, FaceDomain, FrameStatus, FusedFrame, FusionError, SurfaceFuser};
 
 /// Template coordinates (metres) → finite-element domain coordinates (millimetres).
 pub const DOMAIN_UNITS_PER_METRE: f64 = 1000.0;
@@ -110,17 +110,6 @@ pub struct AnchoredFrame<'a> {
     pub depth: FrameDepth<'a>,
 }
 
-/// What [`AnchoredFuser::process`] did.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AnchoredResult {
-    pub status: FrameStatus,
-    /// Fraction of the vertices with a valid raw sample.
-    pub valid_fraction: f64,
-    pub rhs_seconds: f64,
-    pub solve_seconds: f64,
-    pub relative_residual: f64,
-}
-
 /// Streaming face-anchored fusion: the fixed mesh, its factored system and per-frame buffers
 /// (allocated once; [`AnchoredFuser::process`] allocates nothing).
 pub struct AnchoredFuser {
@@ -159,9 +148,9 @@ impl AnchoredFuser {
         k: Intrinsics,
         weights: Weights,
         max_depth: f64,
-    ) -> Result<AnchoredFuser, PipelineError> {
+    ) -> Result<AnchoredFuser, FusionError> {
         if template.len() != domain.template_vertex_count {
-            return Err(PipelineError::InvalidOption {
+            return Err(FusionError::InvalidOption {
                 name: "template",
                 value: format!("{} vertices", template.len()),
                 reason: "must match the face domain's template",
@@ -231,14 +220,6 @@ impl AnchoredFuser {
         &mut self.solver
     }
 
-    /// Forgets the history (lost track, shot cut; ERRATA 18): the next frame has no temporal
-    /// term.
-    pub fn reset(&mut self) {
-        self.solver.reset();
-        self.scale = 1.0;
-        self.scale_frames = 0;
-    }
-
     /// The face's size relative to the template, as measured by the depth maps so far (1 with
     /// the face CNN's surface, which has the template's size by construction).
     pub fn scale(&self) -> f64 {
@@ -263,17 +244,6 @@ impl AnchoredFuser {
         self.scale_frames += 1;
         let alpha = SCALE_SMOOTHING.max(1.0 / self.scale_frames as f64);
         self.scale += alpha * (median - self.scale);
-    }
-
-    /// The last fused surface, camera coordinates, metres (#V).
-    pub fn solution(&self) -> &[[f64; 3]] {
-        &self.solution
-    }
-
-    /// The last raw surface at the vertices, camera coordinates; holes hold what the solver
-    /// used instead (see [`AnchoredFuser::valid`]).
-    pub fn raw(&self) -> &[[f64; 3]] {
-        &self.raw
     }
 
     /// Per vertex: whether the last frame had a raw sample there.
@@ -309,10 +279,10 @@ impl AnchoredFuser {
     /// # Errors
     /// When the frame's landmarks or surface do not have one entry per template vertex, or
     /// the pose is not finite.
-    pub fn process(&mut self, frame: &AnchoredFrame<'_>) -> Result<AnchoredResult, PipelineError> {
+    pub fn process(&mut self, frame: &AnchoredFrame<'_>) -> Result<FusedFrame, FusionError> {
         let start = Instant::now();
         let m = self.domain.template_vertex_count;
-        let wrong = |what: &'static str, found: usize| PipelineError::InvalidOption {
+        let wrong = |what: &'static str, found: usize| FusionError::InvalidOption {
             name: what,
             value: format!("{found} entries"),
             reason: "needs one per template vertex",
@@ -326,7 +296,7 @@ impl AnchoredFuser {
             }
         }
         if !frame.pose.is_finite() {
-            return Err(PipelineError::InvalidOption {
+            return Err(FusionError::InvalidOption {
                 name: "pose",
                 value: format!("{:?}", frame.pose),
                 reason: "must be finite",
@@ -380,12 +350,9 @@ impl AnchoredFuser {
             }
         }
         let n = self.domain.vertex_count();
-        let mut result = AnchoredResult {
-            status: FrameStatus::Solved,
+        let mut result = FusedFrame {
             valid_fraction: valid_count as f64 / n as f64,
-            rhs_seconds: 0.0,
-            solve_seconds: 0.0,
-            relative_residual: 0.0,
+            ..FusedFrame::unsolved(FrameStatus::Solved)
         };
         if valid_count == 0 {
             let Some(prev) = self.solver.previous() else {
@@ -422,14 +389,6 @@ impl AnchoredFuser {
         self.write_solution();
     }
 
-    /// Mean |H| and roughness (ERRATA 13) of the last raw surface and of the last solution.
-    pub fn frame_quality(&mut self) -> (SurfaceQuality, SurfaceQuality) {
-        (
-            self.metrics.evaluate(&self.raw),
-            self.metrics.evaluate(&self.solution),
-        )
-    }
-
     fn write_solution(&mut self) {
         for (i, s) in self.solution.iter_mut().enumerate() {
             *s = self.pose.apply([
@@ -457,5 +416,54 @@ impl AnchoredFuser {
         let x: [f64; 3] =
             std::array::from_fn(|c| (0..3).map(|j| w[j] * corners[j][c]).sum::<f64>() / sum);
         (x[2] <= self.max_depth).then_some(x)
+    }
+}
+
+impl SurfaceFuser for AnchoredFuser {
+    fn triangles(&self) -> &[[u32; 3]] {
+        &self.domain.triangles
+    }
+
+    /// Camera coordinates.
+    fn solution(&self) -> &[[f64; 3]] {
+        &self.solution
+    }
+
+    /// Camera coordinates; holes hold what the solver used instead (see
+    /// [`AnchoredFuser::valid`]).
+    fn raw(&self) -> &[[f64; 3]] {
+        &self.raw
+    }
+
+    /// Also forgets the face's measured scale.
+    fn reset(&mut self) {
+        self.solver.reset();
+        self.scale = 1.0;
+        self.scale_frames = 0;
+    }
+
+    fn frame_quality(&mut self) -> (SurfaceQuality, SurfaceQuality) {
+        (
+            self.metrics.evaluate(&self.raw),
+            self.metrics.evaluate(&self.solution),
+        )
+    }
+
+    /// Head coordinates; the pose is the head pose at the face's scale.
+    fn clip_state(&self) -> ClipState {
+        ClipState {
+            b: self.b.clone(),
+            x: self.x_head.clone(),
+            pose: self.pose,
+        }
+    }
+
+    fn system_mut(&mut self) -> &mut FusionSystem {
+        self.solver.system_mut()
+    }
+
+    fn load_clip_solution(&mut self, x: &Mat<f64>, pose: RigidTransform, raw: &[[f64; 3]]) {
+        self.set_solution_head(x, pose);
+        self.raw.copy_from_slice(raw);
     }
 }

@@ -5,9 +5,9 @@ use visage_fem::FemError;
 use visage_mesh::io::MeshIoError;
 use visage_mesh::MeshError;
 
-/// Errors of the sequence pipeline. Each names the file or parameter at fault.
+/// Errors of the fusion. Each names the file or parameter at fault.
 #[derive(Debug, thiserror::Error)]
-pub enum PipelineError {
+pub enum FusionError {
     #[error(transparent)]
     Camera(#[from] CameraError),
     #[error("meshing: {0}")]
@@ -33,6 +33,9 @@ pub enum PipelineError {
     },
     #[error("{}: no frame has any valid depth", dir.display())]
     NoValidDepth { dir: PathBuf },
+    /// A frame lacks an input its design needs.
+    #[error("{what}")]
+    MissingInput { what: &'static str },
     #[error("invalid option {name} = {value}: {reason}")]
     InvalidOption {
         name: &'static str,

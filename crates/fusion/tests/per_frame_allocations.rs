@@ -7,8 +7,8 @@ mod counting_allocator;
 use counting_allocator::allocations;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_fem::{FusionSystem, Weights};
+use visage_fusion::{FrameStatus, FusionSetup, ImagePlaneFuser, MeshingOptions, SurfaceFuser};
 use visage_mesh::Mask;
-use visage_pipeline::{FrameStatus, Fuser, FusionSetup, MeshingOptions};
 
 #[test]
 fn streaming_frames_allocate_nothing() {
@@ -39,12 +39,12 @@ fn streaming_frames_allocate_nothing() {
     )
     .unwrap();
     let system = FusionSystem::new(setup.ops.clone(), Weights::default()).unwrap();
-    let mut fuser = Fuser::new(setup, system, 10.0);
-    assert_eq!(fuser.process(&first).status, FrameStatus::Solved);
+    let mut fuser = ImagePlaneFuser::new(setup, system, 10.0);
+    assert_eq!(fuser.process(&first).unwrap().status, FrameStatus::Solved);
     let frames: Vec<DepthMap> = (1..5).map(|t| frame(t as f64)).collect();
     for depth in &frames {
         let before = allocations();
-        let r = fuser.process(depth);
+        let r = fuser.process(depth).unwrap();
         let quality = fuser.frame_quality();
         let after = allocations();
         assert_eq!(r.status, FrameStatus::Solved);

@@ -1,0 +1,332 @@
+//! The two fusion designs of a video run behind one type: the face-anchored mesh with the
+//! pose-compensated temporal term ([`MeshKind::Face`], [`AnchoredFuser`]) and the paper's
+//! fixed image-plane mesh ([`MeshKind::Image`], [`ImagePlaneFuser`] on a domain fixed by the
+//! first frame with a face, see [`crate::image_domain`]).
+//!
+//! Both give, per frame, the fused and the raw surface on their mesh (camera coordinates,
+//! metres) and both surfaces at the 468 landmarks — face mesh: vertices `0..468` (domain
+//! vertex `i < 468` is landmark `i`); image mesh: each landmark pixel located in the planar
+//! mesh and the surface interpolated barycentrically — so the designs are compared on the same
+//! points.
+
+use faer::Mat;
+use serde::Serialize;
+use visage_camera::{DepthMap, Intrinsics, RigidTransform};
+use visage_fem::{solve_clip, ClipOptions, ClipReport, FusionSystem, SurfaceQuality, Weights};
+
+use crate::image_domain::{dilated_face_mask, dilation_radius};
+use crate::point_locator::PointLocator;
+use crate::{
+    AnchoredFrame, AnchoredFuser, ClipState, FaceDomain, FrameDepth, FrameStatus, FusedFrame,
+    FusionError, FusionSetup, ImagePlaneFuser, MeshingOptions, SurfaceFuser,
+};
+
+/// Which mesh carries the surface.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MeshKind {
+    /// Face-anchored (the FaceMesh template, subdivided), pose-compensated temporal term.
+    #[default]
+    Face,
+    /// The paper's fixed image-plane mesh.
+    Image,
+}
+
+/// Fusion parameters of a video run.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct FusionParams {
+    pub mesh: MeshKind,
+    /// λ (face mesh: mm⁴ of the canonical face; image mesh: reference pixels⁴) and μ.
+    pub weights: Weights,
+    /// Face mesh: subdivision factor of the FaceMesh template.
+    pub subdivision: usize,
+    /// Image mesh: meshing of the fixed domain.
+    pub meshing: MeshingOptions,
+    /// Depth beyond this (metres) counts as missing.
+    pub max_depth_m: f64,
+}
+
+/// The face template the face-anchored mesh is built on: the canonical FaceMesh's vertices
+/// (head coordinates, metres; vertex `i` is landmark `i`) and triangles.
+#[derive(Clone, Copy, Debug)]
+pub struct FaceTemplate<'a> {
+    pub vertices: &'a [[f64; 3]],
+    pub triangles: &'a [[u32; 3]],
+}
+
+/// One frame's input to the fusion: the tracked face and its depth.
+pub struct FaceFrame<'a> {
+    /// The 468 landmark pixels.
+    pub landmarks_px: &'a [[f64; 2]],
+    /// Head pose (canonical face → camera).
+    pub pose: RigidTransform,
+    /// The metric landmarks of the face fit (the face CNN's surface).
+    pub metric_landmarks: &'a [[f64; 3]],
+    /// The frame's depth map: a depth folder's, or the image mesh's rendered face depth.
+    pub depth_map: Option<&'a DepthMap>,
+    /// The rendered face depth (its mask) and face box `[x, y, w, h]` (pixels), needed by the
+    /// image mesh's first frame.
+    pub face_mask: Option<(&'a DepthMap, [f32; 4])>,
+}
+
+/// What fusing a frame gave: the fuser's record and the raw and fused surfaces' quality.
+#[derive(Clone, Copy, Debug)]
+pub struct FusedSurfaces {
+    pub frame: FusedFrame,
+    pub raw_quality: SurfaceQuality,
+    pub fused_quality: SurfaceQuality,
+}
+
+/// A frame kept for the clip solve: its [`ClipState`], raw surface and landmark pixels.
+pub struct ClipFrame {
+    pub state: ClipState,
+    pub raw: Vec<[f64; 3]>,
+    pub landmarks_px: Vec<[f64; 2]>,
+}
+
+struct ImagePlane {
+    fuser: ImagePlaneFuser,
+    locator: PointLocator,
+}
+
+enum Design {
+    Face(Box<AnchoredFuser>),
+    /// Built on the first frame with a face.
+    Image(Option<Box<ImagePlane>>),
+}
+
+/// The fusion of a video run (either design).
+pub struct SurfaceFusion {
+    design: Design,
+    params: FusionParams,
+    k: Intrinsics,
+}
+
+/// Quality figures of a frame without a surface.
+const NO_SURFACE: SurfaceQuality = SurfaceQuality {
+    mean_abs_h: 0.0,
+    roughness: 0.0,
+};
+
+impl SurfaceFusion {
+    /// The face mesh builds and factors its operators now; the image mesh on its first frame.
+    pub fn new(
+        params: FusionParams,
+        template: FaceTemplate<'_>,
+        k: Intrinsics,
+    ) -> Result<SurfaceFusion, FusionError> {
+        let design = match params.mesh {
+            MeshKind::Face => {
+                let domain = FaceDomain::subdivide(
+                    template.vertices.len(),
+                    template.triangles,
+                    params.subdivision,
+                )?;
+                Design::Face(Box::new(AnchoredFuser::new(
+                    domain,
+                    template.vertices,
+                    k,
+                    params.weights,
+                    params.max_depth_m,
+                )?))
+            }
+            MeshKind::Image => Design::Image(None),
+        };
+        Ok(SurfaceFusion { design, params, k })
+    }
+
+    /// The built fuser, if any (the image mesh has none before its first face).
+    fn fuser(&self) -> Option<&dyn SurfaceFuser> {
+        match &self.design {
+            Design::Face(f) => Some(f.as_ref()),
+            Design::Image(Some(p)) => Some(&p.fuser),
+            Design::Image(None) => None,
+        }
+    }
+
+    fn fuser_mut(&mut self) -> Option<&mut dyn SurfaceFuser> {
+        match &mut self.design {
+            Design::Face(f) => Some(f.as_mut()),
+            Design::Image(Some(p)) => Some(&mut p.fuser),
+            Design::Image(None) => None,
+        }
+    }
+
+    /// The mesh's triangles, once the mesh exists (image mesh: after the first face).
+    pub fn triangles(&self) -> Option<&[[u32; 3]]> {
+        self.fuser().map(|f| f.triangles())
+    }
+
+    /// Which design this is.
+    pub fn mesh(&self) -> MeshKind {
+        self.params.mesh
+    }
+
+    /// The fusion parameters.
+    pub fn params(&self) -> &FusionParams {
+        &self.params
+    }
+
+    /// Vertices of the mesh (0 before the image mesh's first face).
+    pub fn vertex_count(&self) -> usize {
+        self.fused().len()
+    }
+
+    /// Whether the next frame needs [`FaceFrame::face_mask`] (the image mesh's first face).
+    pub fn needs_face_mask(&self) -> bool {
+        matches!(self.design, Design::Image(None))
+    }
+
+    /// Forgets the temporal history (the face was lost).
+    pub fn reset(&mut self) {
+        if let Some(f) = self.fuser_mut() {
+            f.reset();
+        }
+    }
+
+    /// The last fused surface (#V, camera coordinates, metres).
+    pub fn fused(&self) -> &[[f64; 3]] {
+        self.fuser().map_or(&[], |f| f.solution())
+    }
+
+    /// The last raw surface on the same mesh (holes as the solver filled them).
+    pub fn raw(&self) -> &[[f64; 3]] {
+        self.fuser().map_or(&[], |f| f.raw())
+    }
+
+    /// Fuses one frame. Allocation-free with the face mesh; the image mesh builds its mesh and
+    /// factors its system on its first frame and allocates when in-painting a frame without
+    /// predecessor.
+    ///
+    /// # Errors
+    /// The image mesh without a depth map (or, on its first frame, without the face mask),
+    /// a domain that cannot be meshed, or a frame that does not fit the fuser.
+    pub fn process(&mut self, frame: &FaceFrame<'_>) -> Result<FusedSurfaces, FusionError> {
+        if let Design::Image(None) = self.design {
+            self.build_image_plane(frame)?;
+        }
+        let fused = match &mut self.design {
+            Design::Face(f) => {
+                let depth = match frame.depth_map {
+                    Some(map) => FrameDepth::Map(map),
+                    None => FrameDepth::Surface(frame.metric_landmarks),
+                };
+                f.process(&AnchoredFrame {
+                    landmarks_px: frame.landmarks_px,
+                    pose: frame.pose,
+                    depth,
+                })?
+            }
+            Design::Image(Some(p)) => {
+                let depth = frame.depth_map.ok_or(FusionError::MissingInput {
+                    what: "the image-plane mesh needs a depth map per frame",
+                })?;
+                p.fuser.process(depth)?
+            }
+            Design::Image(None) => unreachable!("built above"),
+        };
+        let (raw_quality, fused_quality) = match self.fuser_mut() {
+            Some(f) if fused.status != FrameStatus::NoData => f.frame_quality(),
+            _ => (NO_SURFACE, NO_SURFACE),
+        };
+        Ok(FusedSurfaces {
+            frame: fused,
+            raw_quality,
+            fused_quality,
+        })
+    }
+
+    /// The fused and raw surfaces at the 468 landmark pixels `landmarks_px` (NaN where a
+    /// landmark falls outside the image mesh).
+    pub fn landmark_points(
+        &self,
+        landmarks_px: &[[f64; 2]],
+        fused: &mut Vec<[f64; 3]>,
+        raw: &mut Vec<[f64; 3]>,
+    ) {
+        fused.clear();
+        raw.clear();
+        match &self.design {
+            Design::Face(f) => {
+                fused.extend_from_slice(&f.solution()[..landmarks_px.len()]);
+                raw.extend_from_slice(&f.raw()[..landmarks_px.len()]);
+            }
+            Design::Image(Some(p)) => {
+                let missing = [f64::NAN; 3];
+                for &px in landmarks_px {
+                    let locate = |s: &[[f64; 3]]| p.locator.interpolate(s, px).unwrap_or(missing);
+                    fused.push(locate(p.fuser.solution()));
+                    raw.push(locate(p.fuser.raw()));
+                }
+            }
+            Design::Image(None) => {}
+        }
+    }
+
+    /// The state the clip solve keeps for the current (just fused) frame.
+    pub fn clip_frame(&self, landmarks_px: &[[f64; 2]]) -> ClipFrame {
+        let state = match self.fuser() {
+            Some(f) => f.clip_state(),
+            None => ClipState {
+                b: Mat::zeros(0, 3),
+                x: Mat::zeros(0, 3),
+                pose: RigidTransform::IDENTITY,
+            },
+        };
+        ClipFrame {
+            state,
+            raw: self.raw().to_vec(),
+            landmarks_px: landmarks_px.to_vec(),
+        }
+    }
+
+    /// Solves the clip system (ERRATA 1, 17) over `frames` — consecutive frames of one track —
+    /// on the streaming factorisation; their states' `x` hold the solutions afterwards.
+    pub fn solve_clip(&mut self, frames: &mut [ClipFrame], options: &ClipOptions) -> ClipReport {
+        let take = |m: &mut Mat<f64>| std::mem::replace(m, Mat::new());
+        let b: Vec<Mat<f64>> = frames.iter_mut().map(|f| take(&mut f.state.b)).collect();
+        let mut x: Vec<Mat<f64>> = frames.iter_mut().map(|f| take(&mut f.state.x)).collect();
+        let Some(fuser) = self.fuser_mut() else {
+            return ClipReport {
+                iterations: 0,
+                relative_residual: 0.0,
+                converged: true,
+            };
+        };
+        let report = solve_clip(fuser.system_mut(), &b, &mut x, options);
+        for (f, x) in frames.iter_mut().zip(x) {
+            f.state.x = x;
+        }
+        report
+    }
+
+    /// Makes a clip-solved frame the current surface (fused = its clip solution in camera
+    /// coordinates, raw = its raw surface) and returns the raw and fused quality.
+    pub fn load_clip_frame(&mut self, frame: &ClipFrame) -> (SurfaceQuality, SurfaceQuality) {
+        match self.fuser_mut() {
+            Some(f) => {
+                f.load_clip_solution(&frame.state.x, frame.state.pose, &frame.raw);
+                f.frame_quality()
+            }
+            None => (NO_SURFACE, NO_SURFACE),
+        }
+    }
+
+    fn build_image_plane(&mut self, frame: &FaceFrame<'_>) -> Result<(), FusionError> {
+        let (face_depth, face_box) = frame.face_mask.ok_or(FusionError::MissingInput {
+            what: "the image-plane mesh's first frame needs the face mask",
+        })?;
+        let reference = frame.depth_map.unwrap_or(face_depth);
+        let domain = dilated_face_mask(face_depth, dilation_radius(face_box));
+        let setup = FusionSetup::new(&self.k, &domain, reference, &self.params.meshing)?;
+        let system = FusionSystem::new(setup.ops.clone(), self.params.weights)?;
+        let locator = PointLocator::new(
+            &setup.mesh.points,
+            &setup.mesh.triangles,
+            2.0 * self.params.meshing.spacing as f64,
+        );
+        let fuser = ImagePlaneFuser::new(setup, system, self.params.max_depth_m);
+        self.design = Design::Image(Some(Box::new(ImagePlane { fuser, locator })));
+        Ok(())
+    }
+}
