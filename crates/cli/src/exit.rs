@@ -20,12 +20,23 @@ impl std::error::Error for Failure {}
 /// Exit code of errors that do not say otherwise: bad input or environment.
 pub const BAD_INPUT: u8 = 2;
 
+/// Exit code of a bug.
+pub const INTERNAL: u8 = 1;
+
 /// Prints an error chain on stderr and turns it into the process exit code.
 pub fn report(result: anyhow::Result<()>) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            let code = err.downcast_ref::<Failure>().map_or(BAD_INPUT, |f| f.code);
+            let internal = err.chain().any(|e| {
+                e.downcast_ref::<visage::Error>()
+                    .is_some_and(|e| e.is_internal())
+            });
+            let code = match err.downcast_ref::<Failure>() {
+                Some(f) => f.code,
+                None if internal => INTERNAL,
+                None => BAD_INPUT,
+            };
             eprintln!("error: {err:#}");
             ExitCode::from(code)
         }

@@ -9,7 +9,7 @@
 
 mod commands;
 mod exit;
-mod video_run;
+mod progress;
 
 use std::process::ExitCode;
 
@@ -25,10 +25,12 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Video, image folder or image in, a fused metric face mesh per frame out (issue #6):
-    /// OUT/meshes/NNNNNN.ply, landmarks.json, metrics.json. Exit codes: 0 done; 2 bad input
-    /// (missing/corrupt input — a broken video keeps the frames before the break —,
-    /// intrinsics for another size, unwritable output, missing models); 1 internal error.
+    /// Video, image folder or image in, a fused metric face mesh per frame out
+    ///
+    /// Writes OUT/meshes/NNNNNN.ply, landmarks.json, metrics.json and camera.json. Exit
+    /// codes: 0 done; 2 bad input (missing or corrupt input — a broken video keeps the frames
+    /// before the break —, intrinsics for another size, unwritable output, missing models);
+    /// 1 internal error.
     Run(commands::run::RunArgs),
     /// The `run` pipeline without writing meshes, timed per stage: JSON on standard output.
     Bench(commands::bench::BenchArgs),

@@ -3,15 +3,12 @@
 //! stage; JSON on standard output and optionally in a file.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
 use serde_json::json;
-use visage_face::{model_files, CanonicalMesh};
 
-use super::run::{check_input, execute, PipelineArgs};
-use crate::video_run::Output;
+use super::run::{terminal, PipelineArgs};
 
 /// Arguments of `visage bench`.
 #[derive(Args, Debug)]
@@ -26,13 +23,14 @@ pub struct BenchArgs {
 /// Runs `visage bench`.
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let p = &args.pipeline;
-    let start = Instant::now();
-    check_input(&p.input)?;
-    let models = p.models.clone().unwrap_or_else(model_files::models_dir);
-    let canonical = CanonicalMesh::load(&models)?;
-    let (outcome, params, k, vertices) = execute(p, &canonical, &models, Output::Nothing, start)?;
+    std::fs::metadata(&p.input)
+        .with_context(|| format!("{}: cannot read the input", p.input.display()))?;
+    let (input, reconstructor) = p.open()?;
+    let bar = p.progress(&input);
+    let outcome = reconstructor.run(input, &mut terminal(&bar));
+    bar.finish_and_clear();
     if let Some(e) = outcome.error {
-        return Err(e.context(format!(
+        return Err(anyhow::Error::new(e).context(format!(
             "benchmark stopped after {} frames",
             outcome.frames.len()
         )));
@@ -40,10 +38,10 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let s = &outcome.summary;
     let doc = json!({
         "input": p.input.display().to_string(),
-        "width": k.width,
-        "height": k.height,
-        "parameters": params,
-        "mesh_vertices": vertices,
+        "width": outcome.intrinsics.width,
+        "height": outcome.intrinsics.height,
+        "parameters": outcome.parameters,
+        "mesh_vertices": outcome.mesh.vertices,
         "writes_meshes": false,
         "frames": s.frames,
         "fps": s.fps,

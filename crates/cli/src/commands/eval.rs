@@ -1,4 +1,4 @@
-//! `visage eval synthetic`: the ground-truth benchmark (issue #5) — synthetic ICT-FaceKit
+//! `visage eval synthetic`: the ground-truth benchmark — synthetic ICT-FaceKit
 //! sequences, CNN-like depth noise, the paper's fusion against baselines.
 //!
 //! Flags are parsed in two stages: [`SyntheticArgs`] (raw, clap) → `BenchmarkConfig`
@@ -9,8 +9,8 @@ use std::path::PathBuf;
 use anyhow::{bail, Context};
 use clap::{Args, Subcommand};
 use visage_eval::{
-    run_benchmark, run_sweep, table, write_results, write_sweep, BenchmarkConfig, FaceAnchoring,
-    Method, NoiseModel, ANCHORED_WEIGHTS,
+    run_benchmark, run_sweep, sweep_table, table, write_results, write_sweep, BenchmarkConfig,
+    FaceAnchoring, Method, NoiseModel, ANCHORED_WEIGHTS,
 };
 use visage_face::CanonicalMesh;
 use visage_fem::Weights;
@@ -211,16 +211,7 @@ fn synthetic(args: SyntheticArgs) -> anyhow::Result<()> {
             &mut progress,
         )?;
         write_sweep(&points, &args.sweep_lambda, &args.sweep_mu, &args.out)?;
-        println!(
-            "{:>8} {:>8} {:>9} {:>10} {:>6}",
-            "lambda", "mu", "rmse_mm", "jitter_mm", "lag"
-        );
-        for p in &points {
-            println!(
-                "{:>8} {:>8} {:>9.3} {:>10.3} {:>6.2}",
-                p.lambda, p.mu, p.rmse_mm, p.jitter_mm, p.lag_frames
-            );
-        }
+        print!("{}", sweep_table(&points));
     }
     println!("wrote {}", args.out.join("results.json").display());
     Ok(())

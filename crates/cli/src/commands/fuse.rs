@@ -4,21 +4,13 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use visage_camera::{DepthKind, Intrinsics, DEFAULT_FOV_DEG};
-use visage_fem::{ClipOptions, Weights};
-use visage_mesh::TriangulationKind;
-use visage_pipeline::{
-    fuse_sequence, DepthSequence, FuseOptions, MeshingOptions, Mode, DEFAULT_MAX_DEPTH_M,
+use visage::{
+    fuse_depth_folder, ClipOptions, DepthKind, DepthSequence, FuseOptions, Intrinsics,
+    MeshingOptions, TemporalMode, TriangulationKind, Weights, DEFAULT_FOV_DEG, DEFAULT_MAX_DEPTH_M,
 };
 
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum ModeArg {
-    /// Causal, frame by frame (live capture).
-    Streaming,
-    /// Exact minimiser over the whole clip.
-    Clip,
-}
+use super::run::ModeArg;
+use crate::progress::progress_bar;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum DepthKindArg {
@@ -116,9 +108,10 @@ pub fn run(args: FuseArgs) -> anyhow::Result<()> {
         }
     };
     let options = FuseOptions {
+        weights,
         mode: match args.mode {
-            ModeArg::Streaming => Mode::Streaming,
-            ModeArg::Clip => Mode::Clip,
+            ModeArg::Streaming => TemporalMode::Streaming,
+            ModeArg::Clip => TemporalMode::Clip,
         },
         meshing: MeshingOptions {
             spacing: args.spacing,
@@ -136,21 +129,6 @@ pub fn run(args: FuseArgs) -> anyhow::Result<()> {
             tolerance: args.clip_tolerance,
             ..ClipOptions::default()
         },
-        save_raw: args.save_raw,
-    };
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        let bar = ProgressBar::with_draw_target(
-            Some(sequence.frames.len() as u64),
-            ProgressDrawTarget::stderr(),
-        );
-        if let Ok(style) =
-            ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  eta {eta}")
-        {
-            bar.set_style(style);
-        }
-        bar
     };
     let context = || {
         let intrinsics = args.intrinsics.as_ref().map_or_else(
@@ -162,31 +140,33 @@ pub fn run(args: FuseArgs) -> anyhow::Result<()> {
             args.depth.display()
         )
     };
-    let report = fuse_sequence(
+    let bar = progress_bar(args.quiet, Some(sequence.frames.len()));
+    let report = fuse_depth_folder(
         &sequence,
         &k,
-        weights,
         &options,
         &args.out,
+        args.save_raw,
         &mut |done, total| {
             bar.set_length(total as u64);
             bar.set_position(done as u64);
         },
+        &mut |warning| bar.suspend(|| eprintln!("warning: {warning}")),
     )
     .with_context(context)?;
     bar.finish_and_clear();
     if !args.quiet {
         let s = &report.summary;
         eprintln!(
-            "{} frames ({} solved, {} carried, {} without data) → {}; mesh {} vertices, factor {:.1} ms, median solve {:.2} ms, curvature improvement {:.1}×",
+            "{} frames ({} solved, {} carried, {} without data) → {}; mesh {} vertices, \
+             median fusion {:.2} ms, curvature improvement {:.1}×",
             s.frames,
             s.solved,
             s.carried,
             s.no_data,
             args.out.display(),
             report.mesh.vertices,
-            report.solver.factor_ms,
-            s.median_solve_ms,
+            s.stages.get("fuse").map_or(0.0, |p| p.median_ms),
             s.mean_curvature_improvement
         );
     }

@@ -4,13 +4,13 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use clap::Args;
-use serde_json::{json, Value};
+use serde_json::json;
+use visage::{check_fov, FaceRecord, LandmarksFrame};
 use visage_camera::{write_depth_png, DepthKind, Intrinsics, DEFAULT_FOV_DEG};
 use visage_face::{
-    fit_face_geometry, model_files, render_faces_depth, CanonicalMesh, Face, FaceGeometry,
-    FaceMesh, FaceTracker,
+    fit_face_geometry, model_files, render_faces_depth, CanonicalMesh, Face, FaceMesh, FaceTracker,
 };
 use visage_video::{is_image_path, FrameSource};
 
@@ -42,9 +42,7 @@ pub struct LandmarksArgs {
 /// Runs `visage landmarks`.
 pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
     let fov = args.fov_deg.unwrap_or(DEFAULT_FOV_DEG);
-    if !(fov.is_finite() && fov > 0.0 && fov < 180.0) {
-        bail!("--fov-deg {fov}: must lie strictly between 0 and 180");
-    }
+    check_fov(fov)?;
     let intrinsics = args
         .intrinsics
         .as_deref()
@@ -83,18 +81,19 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
             if faces.is_empty() {
                 eprintln!("warning: {}: no face found", frame.source);
             }
-            let mut faces_json = Vec::new();
+            let mut records = Vec::new();
             let mut geometries = Vec::new();
             for face in &faces {
-                let mut fj = face_json(face);
                 match fit_face_geometry(&canonical, &face.landmarks.points, &k) {
                     Ok(g) => {
-                        fj["pose"] = pose_json(&g);
+                        records.push(FaceRecord::new(face, Some(&g)));
                         geometries.push(g);
                     }
-                    Err(e) => eprintln!("warning: {}: no metric fit: {e}", frame.source),
+                    Err(e) => {
+                        eprintln!("warning: {}: no metric fit: {e}", frame.source);
+                        records.push(FaceRecord::new(face, None));
+                    }
                 }
-                faces_json.push(fj);
             }
             if let Some(dir) = &args.depth_out {
                 let depth = render_faces_depth(&geometries, &canonical, &k, DepthKind::Z)?;
@@ -102,13 +101,13 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
                 write_depth_png(&path, &depth, 1000.0)
                     .with_context(|| format!("cannot write {}", path.display()))?;
             }
-            frames_json.push(json!({
-                "source": frame.source,
-                "index": frame.index,
-                "width": w,
-                "height": h,
-                "faces": faces_json,
-            }));
+            frames_json.push(LandmarksFrame {
+                source: frame.source,
+                index: frame.index,
+                width: w,
+                height: h,
+                faces: records,
+            });
             frame_counter += 1;
         }
     }
@@ -124,36 +123,7 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
     write_json(args.out.as_deref(), &doc)
 }
 
-pub(crate) fn face_json(face: &Face) -> Value {
-    let r = |v: f32| (v as f64 * 1000.0).round() / 1000.0;
-    json!({
-        "score": r(face.score),
-        "box": face.bbox.map(r),
-        "presence": r(face.landmarks.presence),
-        "landmarks": face.landmarks.points.iter().map(|p| [r(p[0]), r(p[1]), r(p[2])]).collect::<Vec<_>>(),
-    })
-}
-
-/// Metric head pose: `X_cam = R · X_canonical + t` (camera coordinates, metres), the
-/// canonical face's axes in camera axes, Euler angles and the fit's reprojection error.
-pub(crate) fn pose_json(g: &FaceGeometry) -> Value {
-    let r = &g.pose.rotation;
-    let deg = |v: f64| (v.to_degrees() * 100.0).round() / 100.0;
-    // Z-Y-X (yaw about y, pitch about x, roll about z) of the rotation.
-    let yaw = (-r[2][0]).asin();
-    let pitch = r[2][1].atan2(r[2][2]);
-    let roll = r[1][0].atan2(r[0][0]);
-    json!({
-        "rotation": r,
-        "translation_m": g.pose.translation,
-        "yaw_deg": deg(yaw),
-        "pitch_deg": deg(pitch),
-        "roll_deg": deg(roll),
-        "reprojection_rms_px": (g.rms_px * 1000.0).round() / 1000.0,
-    })
-}
-
-fn write_json(out: Option<&Path>, doc: &Value) -> anyhow::Result<()> {
+fn write_json(out: Option<&Path>, doc: &serde_json::Value) -> anyhow::Result<()> {
     let text = serde_json::to_string(doc)?;
     match out {
         Some(path) => {

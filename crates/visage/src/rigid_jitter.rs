@@ -1,7 +1,6 @@
 //! Jitter after removing rigid motion: the root-mean-square distance between two point sets
 //! (the same points of a surface in consecutive frames) once the second is rigidly aligned to
-//! the first — the issue #6 acceptance measure ("RMS of frame-to-frame vertex motion after
-//! removing the head's rigid motion").
+//! the first: frame-to-frame motion with the head's rigid motion removed.
 //!
 //! Alignment is the unweighted least-squares rotation and translation (Kabsch 1976), solved by
 //! Horn's closed form in [`visage_camera::RigidTransform::fit`].

@@ -1,40 +1,84 @@
-//! The `metrics.json` of `visage run` and the JSON of `visage bench`: per-frame stage times,
-//! solver and surface figures, head pose; summary with throughput, CPU use, peak memory and the
-//! issue #6 quality figures (rigid-aligned jitter, landmark reprojection error).
+//! The metrics schema of `visage run`, `visage bench` and `visage fuse` (`metrics.json`): per
+//! frame the status, stage times, solver and surface figures and head pose; per run the
+//! throughput, CPU use, peak memory and the quality figures (jitter with the rigid head motion
+//! removed, landmark reprojection error), each for the fused and the raw surface.
 
 use serde::Serialize;
 use visage_camera::{Intrinsics, RigidTransform};
-use visage_pipeline::FrameQuality;
+use visage_fem::{ClipReport, SurfaceQuality};
 
-use super::rigid_jitter::JitterMeter;
+use crate::quality::QualitySummary;
 
 /// Outcome of one frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum RunStatus {
-    /// Fused from its own depth; a mesh was written.
+pub enum FrameStatus {
+    /// Fused from its own depth; a mesh was made.
     Solved,
-    /// A face but no valid depth: the previous surface was carried over (mesh written).
+    /// No valid depth: the previous surface was carried over (a mesh was made).
     Carried,
     /// No face found: no mesh; the fusion's history restarts at the next face.
     NoFace,
-    /// A face but no depth and no previous surface: no mesh.
+    /// No depth and no previous surface: no mesh.
     NoData,
+}
+
+impl From<visage_fusion::FrameStatus> for FrameStatus {
+    fn from(s: visage_fusion::FrameStatus) -> Self {
+        match s {
+            visage_fusion::FrameStatus::Solved => FrameStatus::Solved,
+            visage_fusion::FrameStatus::Carried => FrameStatus::Carried,
+            visage_fusion::FrameStatus::NoData => FrameStatus::NoData,
+        }
+    }
+}
+
+/// Mean |H| and roughness of a frame's raw and fused surfaces (ERRATA 13).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct FrameQuality {
+    /// Mean |H| (1/m) of the raw surface on the mesh.
+    pub mean_abs_h_raw: f64,
+    /// Mean |H| (1/m) after fusion.
+    pub mean_abs_h: f64,
+    /// `mean_abs_h_raw / mean_abs_h` (0 when the fused surface is flat).
+    pub curvature_improvement: f64,
+    /// Roughness (radians, mean normal deviation from the one-ring) of the raw surface.
+    pub roughness_raw: f64,
+    /// Roughness (radians) after fusion.
+    pub roughness: f64,
+}
+
+impl FrameQuality {
+    /// The record of a raw and a fused surface's measurements.
+    pub fn of(raw: &SurfaceQuality, fused: &SurfaceQuality) -> Self {
+        FrameQuality {
+            mean_abs_h_raw: raw.mean_abs_h,
+            mean_abs_h: fused.mean_abs_h,
+            curvature_improvement: if fused.mean_abs_h > 0.0 {
+                raw.mean_abs_h / fused.mean_abs_h
+            } else {
+                0.0
+            },
+            roughness_raw: raw.roughness,
+            roughness: fused.roughness,
+        }
+    }
 }
 
 /// Wall-clock milliseconds of each stage for one frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct StageTimes {
-    /// Reading/decoding the frame (FFmpeg pipe or image file).
+    /// Reading/decoding the frame (FFmpeg pipe or image file; a depth folder's PNG).
     pub decode: f64,
     /// Face tracking: landmark network, and the detector when the track was lost.
     pub track: f64,
     /// Metric face fit (pose + metric landmarks).
     pub fit: f64,
-    /// Depth map: `--depth DIR` PNG read, or image mode's face rasterisation (face mode with
-    /// face depth intersects the fitted surface inside the fusion: 0).
+    /// Depth map: a depth folder's PNG read, or the image mesh's face rasterisation (the face
+    /// mesh on the face fit's surface intersects that surface inside the fusion: 0).
     pub depth: f64,
-    /// Fusion: right-hand side, solve, curvature and roughness figures.
+    /// Fusion: right-hand side, solve, curvature and roughness figures (clip mode: plus the
+    /// frame's share of the clip solve).
     pub fuse: f64,
     /// Writing the mesh(es) and the landmarks record.
     pub write: f64,
@@ -84,8 +128,10 @@ pub struct FrameMetrics {
     /// Frame index in the input (video frame number or position in the folder).
     pub index: usize,
     pub source: String,
-    pub status: RunStatus,
-    pub detector_ran: bool,
+    pub status: FrameStatus,
+    /// Whether the face detector ran (video runs; the rest of the frames were tracked).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub detector_ran: Option<bool>,
     pub ms: StageTimes,
     /// Fraction of the vertices (face mesh) or domain pixels (image mesh) with valid depth.
     pub valid_fraction: f64,
@@ -95,16 +141,40 @@ pub struct FrameMetrics {
     #[serde(flatten)]
     pub quality: FrameQuality,
     /// Mean distance (px) between the projected landmark points and the tracked landmarks.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub reprojection_px: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub reprojection_raw_px: Option<f64>,
+    /// Head pose of the metric face fit.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub pose: Option<PoseMetrics>,
     /// RMS reprojection error of the rigid face fit (px).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub fit_rms_px: Option<f64>,
 }
 
 impl FrameMetrics {
+    /// A frame record with nothing measured yet.
+    pub fn new(index: usize, source: String, status: FrameStatus) -> Self {
+        FrameMetrics {
+            index,
+            source,
+            status,
+            detector_ran: None,
+            ms: StageTimes::default(),
+            valid_fraction: 0.0,
+            relative_residual: 0.0,
+            quality: FrameQuality::default(),
+            reprojection_px: None,
+            reprojection_raw_px: None,
+            pose: None,
+            fit_rms_px: None,
+        }
+    }
+
+    /// Whether the frame has a mesh.
     pub fn has_mesh(&self) -> bool {
-        matches!(self.status, RunStatus::Solved | RunStatus::Carried)
+        matches!(self.status, FrameStatus::Solved | FrameStatus::Carried)
     }
 }
 
@@ -135,120 +205,6 @@ impl Percentiles {
             mean_ms: values.iter().sum::<f64>() / values.len() as f64,
         }
     }
-}
-
-/// A figure for the fused surface and the raw one.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct FusedAndRaw {
-    pub fused: Option<f64>,
-    pub raw: Option<f64>,
-}
-
-/// The issue #6 quality figures.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct QualitySummary {
-    /// Mean over consecutive meshed frames of the RMS vertex motion after the best rigid
-    /// alignment (mm), over all mesh vertices. Image mode: vertices are fixed pixels, not
-    /// fixed points of the face, so compare the designs on `landmark_jitter_mm`.
-    pub vertex_jitter_mm: FusedAndRaw,
-    /// The same on the surface at the 468 landmarks (image mode: interpolated at the landmark
-    /// pixels; landmarks outside the mesh are left out of the pair).
-    pub landmark_jitter_mm: FusedAndRaw,
-    /// Mean over meshed frames of the mean landmark reprojection error (px).
-    pub reprojection_px: FusedAndRaw,
-    /// Consecutive frame pairs measured.
-    pub pairs: usize,
-    /// `raw / fused` vertex and landmark jitter.
-    pub vertex_jitter_reduction: Option<f64>,
-    pub landmark_jitter_reduction: Option<f64>,
-}
-
-/// Accumulates the quality figures frame by frame (memory: one frame of each surface).
-#[derive(Default)]
-pub struct QualityMeter {
-    vertex_fused: JitterMeter,
-    vertex_raw: JitterMeter,
-    landmark_fused: JitterMeter,
-    landmark_raw: JitterMeter,
-    reprojection: (f64, f64, usize),
-}
-
-impl QualityMeter {
-    /// A meshed frame: its fused and raw surfaces, the same at the landmarks, and the tracked
-    /// landmark pixels. Returns the frame's mean reprojection errors (fused, raw).
-    pub fn push(
-        &mut self,
-        k: &Intrinsics,
-        fused: &[[f64; 3]],
-        raw: &[[f64; 3]],
-        fused_landmarks: &[[f64; 3]],
-        raw_landmarks: &[[f64; 3]],
-        landmarks_px: &[[f64; 2]],
-    ) -> (Option<f64>, Option<f64>) {
-        self.vertex_fused.push(fused);
-        self.vertex_raw.push(raw);
-        self.landmark_fused.push(fused_landmarks);
-        self.landmark_raw.push(raw_landmarks);
-        let f = reprojection_px(k, fused_landmarks, landmarks_px);
-        let r = reprojection_px(k, raw_landmarks, landmarks_px);
-        if let (Some(f), Some(r)) = (f, r) {
-            self.reprojection.0 += f;
-            self.reprojection.1 += r;
-            self.reprojection.2 += 1;
-        }
-        (f, r)
-    }
-
-    /// A frame without a mesh: no pair spans it.
-    pub fn gap(&mut self) {
-        for m in [
-            &mut self.vertex_fused,
-            &mut self.vertex_raw,
-            &mut self.landmark_fused,
-            &mut self.landmark_raw,
-        ] {
-            m.gap();
-        }
-    }
-
-    pub fn summary(&self) -> QualitySummary {
-        let mm = |m: &JitterMeter| m.mean().map(|v| v * 1e3);
-        let pair = |f: &JitterMeter, r: &JitterMeter| FusedAndRaw {
-            fused: mm(f),
-            raw: mm(r),
-        };
-        let ratio = |p: FusedAndRaw| match (p.fused, p.raw) {
-            (Some(f), Some(r)) if f > 0.0 => Some(r / f),
-            _ => None,
-        };
-        let vertex = pair(&self.vertex_fused, &self.vertex_raw);
-        let landmark = pair(&self.landmark_fused, &self.landmark_raw);
-        let (sf, sr, n) = self.reprojection;
-        QualitySummary {
-            vertex_jitter_mm: vertex,
-            landmark_jitter_mm: landmark,
-            reprojection_px: FusedAndRaw {
-                fused: (n > 0).then(|| sf / n as f64),
-                raw: (n > 0).then(|| sr / n as f64),
-            },
-            pairs: self.vertex_fused.pairs(),
-            vertex_jitter_reduction: ratio(vertex),
-            landmark_jitter_reduction: ratio(landmark),
-        }
-    }
-}
-
-/// Mean pixel distance between the projections of `points` (NaN = missing) and `pixels`.
-fn reprojection_px(k: &Intrinsics, points: &[[f64; 3]], pixels: &[[f64; 2]]) -> Option<f64> {
-    let (sum, count) = points
-        .iter()
-        .zip(pixels)
-        .filter(|(p, _)| p.iter().all(|c| c.is_finite()) && p[2] > 0.0)
-        .fold((0.0, 0usize), |(s, n), (p, q)| {
-            let u = k.project(*p);
-            (s + (u[0] - q[0]).hypot(u[1] - q[1]), n + 1)
-        });
-    (count > 0).then(|| sum / count as f64)
 }
 
 /// Totals of a run.
@@ -288,7 +244,7 @@ impl RunSummary {
         let count = |s| frames.iter().filter(|f| f.status == s).count();
         let solved: Vec<&FrameMetrics> = frames
             .iter()
-            .filter(|f| f.status == RunStatus::Solved)
+            .filter(|f| f.status == FrameStatus::Solved)
             .collect();
         let mean = |g: &dyn Fn(&FrameMetrics) -> f64| {
             if solved.is_empty() {
@@ -310,9 +266,9 @@ impl RunSummary {
         RunSummary {
             frames: frames.len(),
             solved: solved.len(),
-            carried: count(RunStatus::Carried),
-            no_face: count(RunStatus::NoFace),
-            no_data: count(RunStatus::NoData),
+            carried: count(FrameStatus::Carried),
+            no_face: count(FrameStatus::NoFace),
+            no_data: count(FrameStatus::NoData),
             wall_s: timing.wall_s,
             fps: if timing.wall_s > 0.0 {
                 frames.len() as f64 / timing.wall_s
@@ -325,7 +281,10 @@ impl RunSummary {
                 .cpu_s
                 .filter(|_| timing.wall_s > 0.0)
                 .map(|c| c / timing.wall_s),
-            detector_runs: frames.iter().filter(|f| f.detector_ran).count(),
+            detector_runs: frames
+                .iter()
+                .filter(|f| f.detector_ran == Some(true))
+                .count(),
             peak_rss_mib: timing.peak_rss_mib,
             stages,
             max_relative_residual: solved
@@ -349,6 +308,60 @@ pub struct RunTiming {
     pub peak_rss_mib: Option<f64>,
 }
 
+/// Size of the mesh of a run.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct MeshSummary {
+    /// 0 when no frame was meshed.
+    pub vertices: usize,
+    pub triangles: usize,
+    /// Image-plane mesh of a depth folder: boundary vertices, depth range / mean depth, and
+    /// whether (and how many) depth-aware flips were made.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub boundary_vertices: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flatness_ratio: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub depth_aware_flips: Option<usize>,
+}
+
+/// Set-up cost of the solver (a depth folder's run).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SolverSummary {
+    /// Stored values of the Cholesky factor.
+    pub factor_nnz: usize,
+    /// Symbolic + numeric factorisation time (ms), once per sequence.
+    pub factor_ms: f64,
+    /// Clip mode: the solve over the whole clip, and its time (ms).
+    pub clip: Option<ClipReport>,
+    pub clip_ms: Option<f64>,
+}
+
+/// Whether a run finished.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunStatus {
+    Complete,
+    /// Stopped by an error (`Report::error`); the frames before it are listed.
+    Failed,
+}
+
+/// Everything `metrics.json` holds. `P` is the run's parameters.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report<P: Serialize> {
+    pub status: RunStatus,
+    pub error: Option<String>,
+    /// The input (video, image folder or image; depth folder).
+    pub input: String,
+    /// The camera the meshes are in.
+    pub intrinsics: Intrinsics,
+    pub parameters: P,
+    pub mesh: MeshSummary,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub solver: Option<SolverSummary>,
+    pub summary: RunSummary,
+    pub frames: Vec<FrameMetrics>,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -360,17 +373,5 @@ mod tests {
         assert_eq!(p.p95_ms, 95.0);
         assert_eq!(p.mean_ms, 50.5);
         assert_eq!(Percentiles::of(vec![]).p95_ms, 0.0);
-    }
-
-    #[test]
-    fn reprojection_of_points_on_their_rays_is_zero() {
-        let k = Intrinsics::from_fov(64, 48, 60.0).unwrap();
-        let pixels = [[10.0, 20.0], [30.5, 7.25]];
-        let points = pixels.map(|[u, v]| k.backproject(u, v, 0.7));
-        assert!(reprojection_px(&k, &points, &pixels).unwrap() < 1e-9);
-        let moved = [[11.0, 20.0], [30.5, 9.25]];
-        let e = reprojection_px(&k, &points, &moved).unwrap();
-        assert!((e - 1.5).abs() < 1e-9);
-        assert_eq!(reprojection_px(&k, &[[f64::NAN; 3]], &[[0.0; 2]]), None);
     }
 }

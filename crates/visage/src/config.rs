@@ -1,0 +1,232 @@
+//! How a reconstruction is set up: camera, depth source, mesh design, temporal mode, weights
+//! and model files ([`Builder`], from [`crate::Reconstructor::builder`]).
+
+use std::path::PathBuf;
+
+use serde::Serialize;
+use visage_camera::{Intrinsics, DEFAULT_FOV_DEG};
+use visage_fem::{ClipOptions, Weights};
+use visage_fusion::{
+    DepthSequence, FusionParams, MeshKind, MeshingOptions, ANCHORED_WEIGHTS_FACE,
+    ANCHORED_WEIGHTS_MAP, DEFAULT_MAX_DEPTH_M,
+};
+
+use crate::{Error, Input};
+
+/// Default subdivision of the FaceMesh template for the face mesh (≈ 1.8k vertices).
+pub const DEFAULT_SUBDIVISION: usize = 2;
+
+/// The camera's intrinsics.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Camera {
+    /// Known intrinsics (they must match the frame size).
+    Intrinsics(Intrinsics),
+    /// A horizontal field of view in degrees, principal point at the image centre.
+    FovDeg(f64),
+    /// An image input's EXIF 35 mm-equivalent focal length when it has one
+    /// (`f = f35 · diagonal / 43.27 mm`), else [`DEFAULT_FOV_DEG`].
+    #[default]
+    Auto,
+}
+
+/// Where each frame's depth comes from.
+#[derive(Debug, Default)]
+pub enum DepthSource {
+    /// The metric face fit's surface (the face "CNN depth").
+    #[default]
+    Face,
+    /// A folder of 16-bit PNG z-depth maps in millimetres, the i-th file for input frame i
+    /// (an RGB-D sensor, a depth network's output).
+    Folder(DepthSequence),
+}
+
+impl DepthSource {
+    /// `"face"` or the folder's path.
+    pub fn describe(&self) -> String {
+        match self {
+            DepthSource::Face => "face".into(),
+            DepthSource::Folder(seq) => seq.dir.display().to_string(),
+        }
+    }
+}
+
+/// Causal streaming or the exact whole-clip minimiser (ERRATA 1, 4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TemporalMode {
+    /// Past frames only (live capture); memory does not grow with the clip.
+    #[default]
+    Streaming,
+    /// The whole clip solved at once; every frame's system is kept until the end.
+    Clip,
+}
+
+/// The parameters of a video reconstruction, as `metrics.json` records them.
+#[derive(Clone, Debug, Serialize)]
+pub struct Parameters {
+    #[serde(flatten)]
+    pub fusion: FusionParams,
+    pub mode: TemporalMode,
+    /// `"face"` or the depth folder.
+    pub depth: String,
+}
+
+/// Sets up a [`crate::Reconstructor`]. Every option has a default: the face mesh on the face
+/// fit's surface, streaming, the weights that suit the depth source, the camera from the
+/// input, the models from `$VISAGE_MODELS` or `./models`.
+#[derive(Debug, Default)]
+pub struct Builder {
+    pub(crate) camera: Camera,
+    pub(crate) depth: DepthSource,
+    pub(crate) mesh: MeshKind,
+    pub(crate) mode: TemporalMode,
+    pub(crate) lambda: Option<f64>,
+    pub(crate) mu: Option<f64>,
+    pub(crate) subdivision: Option<usize>,
+    pub(crate) spacing: Option<u32>,
+    pub(crate) clip: ClipOptions,
+    pub(crate) models: Option<PathBuf>,
+}
+
+impl Builder {
+    pub fn camera(mut self, camera: Camera) -> Self {
+        self.camera = camera;
+        self
+    }
+
+    pub fn intrinsics(self, k: Intrinsics) -> Self {
+        self.camera(Camera::Intrinsics(k))
+    }
+
+    pub fn fov_deg(self, fov: f64) -> Self {
+        self.camera(Camera::FovDeg(fov))
+    }
+
+    pub fn depth(mut self, depth: DepthSource) -> Self {
+        self.depth = depth;
+        self
+    }
+
+    pub fn mesh(mut self, mesh: MeshKind) -> Self {
+        self.mesh = mesh;
+        self
+    }
+
+    pub fn mode(mut self, mode: TemporalMode) -> Self {
+        self.mode = mode;
+        self
+    }
+
+    /// Smoothness weight λ (face mesh: mm⁴ of the canonical face; image mesh: reference
+    /// pixels⁴). Default: 1 on the face fit's surface, 10 on depth maps or the image mesh.
+    pub fn lambda(mut self, lambda: f64) -> Self {
+        self.lambda = Some(lambda);
+        self
+    }
+
+    /// Temporal weight μ (dimensionless). Default: 0.5, the face mesh on depth maps 1.
+    pub fn mu(mut self, mu: f64) -> Self {
+        self.mu = Some(mu);
+        self
+    }
+
+    /// Face mesh: subdivision of the FaceMesh template (1–16, default
+    /// [`DEFAULT_SUBDIVISION`]).
+    pub fn subdivision(mut self, n: usize) -> Self {
+        self.subdivision = Some(n);
+        self
+    }
+
+    /// Image mesh: grid spacing in pixels.
+    pub fn spacing(mut self, pixels: u32) -> Self {
+        self.spacing = Some(pixels);
+        self
+    }
+
+    /// Clip mode's solver options.
+    pub fn clip_options(mut self, clip: ClipOptions) -> Self {
+        self.clip = clip;
+        self
+    }
+
+    /// The folder with the MediaPipe model files (`visage models fetch`).
+    pub fn models_dir(mut self, dir: impl Into<PathBuf>) -> Self {
+        self.models = Some(dir.into());
+        self
+    }
+
+    /// The weights: the ones given, the rest the defaults of the mesh and depth source.
+    pub(crate) fn weights(&self) -> Result<Weights, Error> {
+        let defaults = match (self.mesh, &self.depth) {
+            (MeshKind::Face, DepthSource::Face) => ANCHORED_WEIGHTS_FACE,
+            (MeshKind::Face, DepthSource::Folder(_)) => ANCHORED_WEIGHTS_MAP,
+            (MeshKind::Image, _) => Weights::default(),
+        };
+        let weights = Weights {
+            lambda: self.lambda.unwrap_or(defaults.lambda),
+            mu: self.mu.unwrap_or(defaults.mu),
+        };
+        weights.validate()?;
+        Ok(weights)
+    }
+
+    pub(crate) fn fusion_params(&self) -> Result<FusionParams, Error> {
+        Ok(FusionParams {
+            mesh: self.mesh,
+            weights: self.weights()?,
+            subdivision: self.subdivision.unwrap_or(DEFAULT_SUBDIVISION),
+            meshing: MeshingOptions {
+                spacing: self.spacing.unwrap_or(MeshingOptions::default().spacing),
+                ..MeshingOptions::default()
+            },
+            max_depth_m: DEFAULT_MAX_DEPTH_M,
+        })
+    }
+
+    /// The intrinsics for frames of `width × height` (`exif`: an image input's 35 mm focal
+    /// length, used by [`Camera::Auto`]).
+    pub(crate) fn intrinsics_for(
+        &self,
+        width: u32,
+        height: u32,
+        exif: Option<f64>,
+    ) -> Result<Intrinsics, Error> {
+        Ok(match self.camera {
+            Camera::Intrinsics(k) => {
+                k.check_size(width, height)?;
+                k
+            }
+            Camera::FovDeg(fov) => {
+                check_fov(fov)?;
+                Intrinsics::from_fov(width, height, fov)?
+            }
+            Camera::Auto => match exif {
+                Some(f35) => Intrinsics::from_focal_35mm(width, height, f35)?,
+                None => Intrinsics::from_fov(width, height, DEFAULT_FOV_DEG)?,
+            },
+        })
+    }
+
+    /// The intrinsics for `input`'s frames.
+    pub(crate) fn intrinsics_for_input(&self, input: &Input) -> Result<Intrinsics, Error> {
+        let (w, h) = input.size();
+        let exif = match self.camera {
+            Camera::Auto => input.exif_focal_35mm().map(|(_, f)| f),
+            _ => None,
+        };
+        self.intrinsics_for(w, h, exif)
+    }
+}
+
+/// A horizontal field of view strictly between 0° and 180°.
+pub fn check_fov(fov: f64) -> Result<(), Error> {
+    if fov.is_finite() && fov > 0.0 && fov < 180.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidOption {
+            name: "--fov-deg",
+            value: fov.to_string(),
+            reason: "must lie strictly between 0 and 180",
+        })
+    }
+}

@@ -1,0 +1,82 @@
+//! Errors of the video pipeline. Each names the input, frame or file at fault; the lower layers'
+//! errors are kept as sources.
+
+use std::path::PathBuf;
+
+use visage_camera::CameraError;
+use visage_face::FaceError;
+use visage_fem::FemError;
+use visage_fusion::FusionError;
+use visage_mesh::io::MeshIoError;
+use visage_video::VideoError;
+
+/// What can stop a reconstruction.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// An option outside its documented range (`name` as the command line spells it).
+    #[error("{name} {value}: {reason}")]
+    InvalidOption {
+        name: &'static str,
+        value: String,
+        reason: &'static str,
+    },
+    #[error(transparent)]
+    Video(#[from] VideoError),
+    #[error(transparent)]
+    Face(#[from] FaceError),
+    #[error(transparent)]
+    Camera(#[from] CameraError),
+    #[error(transparent)]
+    Fusion(#[from] FusionError),
+    #[error(transparent)]
+    Solver(#[from] FemError),
+    /// A step failed on one frame (`frame` names its source, `step` what was being done).
+    #[error("{frame}: {step}")]
+    Frame {
+        frame: String,
+        step: &'static str,
+        source: Box<Error>,
+    },
+    /// An input holds nothing to process.
+    #[error("{}: {reason}", path.display())]
+    Input { path: PathBuf, reason: String },
+    /// A depth folder has fewer frames than the input.
+    #[error("{}: holds {frames} depth frames; input frame {index} has none", dir.display())]
+    MissingDepth {
+        dir: PathBuf,
+        frames: usize,
+        index: usize,
+    },
+    /// An output file or folder could not be written.
+    #[error("cannot write {}", path.display())]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A mesh file could not be written.
+    #[error("cannot write {}", path.display())]
+    WriteMesh { path: PathBuf, source: MeshIoError },
+    /// A stage thread panicked (a bug).
+    #[error("internal error: the {0} stage panicked")]
+    Panic(&'static str),
+}
+
+impl Error {
+    /// `source` as the failure of `step` on the frame `frame`.
+    pub(crate) fn on_frame(frame: &str, step: &'static str, source: impl Into<Error>) -> Error {
+        Error::Frame {
+            frame: frame.to_owned(),
+            step,
+            source: Box::new(source.into()),
+        }
+    }
+
+    /// Whether the error is a bug rather than bad input or environment.
+    pub fn is_internal(&self) -> bool {
+        match self {
+            Error::Panic(_) => true,
+            Error::Frame { source, .. } => source.is_internal(),
+            _ => false,
+        }
+    }
+}

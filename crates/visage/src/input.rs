@@ -1,0 +1,158 @@
+//! A reconstruction's input: a video file (decoded by FFmpeg), a folder of images (name
+//! order) or one image, with the frame size, the frame count when known, and which frames to
+//! keep.
+
+use std::path::{Path, PathBuf};
+
+use visage_video::{focal_length_35mm, is_image_path, read_image, Frame, FrameSource};
+
+use crate::Error;
+
+/// Frames from a video, an image folder or an image, in input order.
+pub struct Input {
+    path: PathBuf,
+    source: FrameSource,
+    width: u32,
+    height: u32,
+    frame_count: Option<usize>,
+    every: usize,
+    max_frames: Option<usize>,
+    kept: usize,
+}
+
+impl Input {
+    /// Opens `path` and reads the frame size (a video's stream header, or the first image).
+    ///
+    /// # Errors
+    /// A missing or unreadable input, a folder without images, a file FFmpeg cannot read.
+    pub fn open(path: &Path) -> Result<Input, Error> {
+        let source = FrameSource::open(path)?;
+        let (width, height, frame_count) = match &source {
+            FrameSource::Video(reader) => {
+                let info = reader.info();
+                (info.width, info.height, info.frame_count)
+            }
+            FrameSource::Images { paths, .. } => {
+                let first = paths.first().ok_or_else(|| Error::Input {
+                    path: path.to_owned(),
+                    reason: "no images".into(),
+                })?;
+                if !is_image_path(first) {
+                    return Err(Error::Input {
+                        path: first.clone(),
+                        reason: "not an image".into(),
+                    });
+                }
+                let (w, h) = read_image(first)?.image.dimensions();
+                (w, h, Some(paths.len()))
+            }
+        };
+        Ok(Input {
+            path: path.to_owned(),
+            source,
+            width,
+            height,
+            frame_count,
+            every: 1,
+            max_frames: None,
+            kept: 0,
+        })
+    }
+
+    /// Keeps only the frames whose index is a multiple of `every` (they keep their index).
+    ///
+    /// # Errors
+    /// `every` = 0.
+    pub fn every(mut self, every: usize) -> Result<Input, Error> {
+        if every == 0 {
+            return Err(Error::InvalidOption {
+                name: "--every",
+                value: "0".into(),
+                reason: "must be at least 1",
+            });
+        }
+        self.every = every;
+        Ok(self)
+    }
+
+    /// Stops after `max_frames` kept frames.
+    ///
+    /// # Errors
+    /// `max_frames` = 0.
+    pub fn max_frames(mut self, max_frames: usize) -> Result<Input, Error> {
+        if max_frames == 0 {
+            return Err(Error::InvalidOption {
+                name: "--max-frames",
+                value: "0".into(),
+                reason: "must be at least 1",
+            });
+        }
+        self.max_frames = Some(max_frames);
+        Ok(self)
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Frame size in pixels (display orientation).
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// How many frames will be kept, when the input's length is known.
+    pub fn frames_to_process(&self) -> Option<usize> {
+        let n = self.frame_count?.div_ceil(self.every);
+        Some(self.max_frames.map_or(n, |m| n.min(m)))
+    }
+
+    /// The 35 mm-equivalent focal length (mm) in the EXIF of an image input's first image, and
+    /// that image's path.
+    pub fn exif_focal_35mm(&self) -> Option<(PathBuf, f64)> {
+        match &self.source {
+            FrameSource::Images { paths, .. } => {
+                let first = paths.first()?;
+                focal_length_35mm(first).map(|f| (first.clone(), f))
+            }
+            FrameSource::Video(_) => None,
+        }
+    }
+}
+
+/// A kept frame and the milliseconds spent decoding it (and the skipped frames before it).
+pub(crate) struct Decoded {
+    pub frame: Frame,
+    pub decode_ms: f64,
+}
+
+impl Input {
+    /// The next kept frame with its decoding time, `None` at the end.
+    pub(crate) fn next_decoded(&mut self) -> Option<Result<Decoded, Error>> {
+        let mut decode_ms = 0.0;
+        loop {
+            if self.max_frames.is_some_and(|m| self.kept >= m) {
+                return None;
+            }
+            let t = std::time::Instant::now();
+            let frame = self.source.next()?;
+            decode_ms += t.elapsed().as_secs_f64() * 1e3;
+            let frame = match frame {
+                Ok(f) => f,
+                Err(e) => return Some(Err(e.into())),
+            };
+            if frame.index % self.every != 0 {
+                continue;
+            }
+            self.kept += 1;
+            return Some(Ok(Decoded { frame, decode_ms }));
+        }
+    }
+}
+
+impl Iterator for Input {
+    type Item = Result<Frame, Error>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        self.next_decoded().map(|d| d.map(|d| d.frame))
+    }
+}

@@ -1,0 +1,80 @@
+//! visage: temporally stable, metric 3-D face meshes from ordinary RGB video, on a CPU.
+//!
+//! Per frame: the face is tracked and its 468 landmarks regressed (MediaPipe's networks, run in
+//! pure Rust), a metric face is fitted to them with the camera's intrinsics, a depth is taken
+//! (the fitted face's surface, or a depth map per frame), and the surface is fused on a fixed
+//! mesh by a variational method — data fidelity, a biharmonic smoothness term and a temporal
+//! term that follows the head — whose matrix is factored once per clip, so a frame costs one
+//! right-hand side and one solve.
+//!
+//! # Frames in, meshes out
+//! ```no_run
+//! use visage::{Input, Reconstructor};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let input = Input::open("face.mp4".as_ref())?;
+//! let mut reconstructor = Reconstructor::builder().build_for(&input)?;
+//! for frame in input {
+//!     let result = reconstructor.process(&frame?)?;
+//!     if let Some(mesh) = result.mesh() {
+//!         // 1.8k vertices in metres, camera coordinates (x right, y down, z forward).
+//!         println!("frame {}: nose tip at {:?}", result.index(), mesh.vertices[1]);
+//!     }
+//! }
+//! # Ok(())
+//! # }
+//! ```
+//! [`Reconstructor::process`] is causal and single-threaded; [`Reconstructor::run`] runs a
+//! whole input with decoding, tracking and fusion on their own threads, in streaming or clip
+//! mode ([`TemporalMode`]), into a [`FrameSink`] such as [`OutputDir`] (PLY meshes,
+//! `landmarks.json`, `metrics.json`). `examples/reconstruct.rs` writes a PLY per frame.
+//!
+//! # Conventions
+//! - Camera coordinates: x right, y down, z forward, metres; pixel `(i, j)`'s centre at
+//!   `(i, j)` ([`Intrinsics`]).
+//! - Frame indices are input indices (a video's frame number, a folder's file number).
+//! - The face mesh's vertex `i < 468` is FaceMesh landmark `i`.
+
+mod atomic_write;
+mod config;
+mod depth_folder;
+mod error;
+mod input;
+mod landmarks;
+mod metrics;
+mod output;
+mod pipeline;
+mod process_stats;
+mod quality;
+mod reconstructor;
+mod recorder;
+mod rigid_jitter;
+mod sink;
+mod stages;
+
+pub use atomic_write::{write_atomically, write_json_atomically};
+pub use config::{
+    check_fov, Builder, Camera, DepthSource, Parameters, TemporalMode, DEFAULT_SUBDIVISION,
+};
+pub use depth_folder::{fuse_depth_folder, FuseOptions};
+pub use error::Error;
+pub use input::Input;
+pub use landmarks::{FaceRecord, LandmarksFrame, PoseRecord};
+pub use metrics::{
+    FrameMetrics, FrameQuality, FrameStatus, MeshSummary, Percentiles, PoseMetrics, Report,
+    RunStatus, RunSummary, RunTiming, SolverSummary, StageTimes,
+};
+pub use output::OutputDir;
+pub use pipeline::QUEUE_CAPACITY;
+pub use quality::{FusedAndRaw, QualitySummary};
+pub use reconstructor::{error_chain, FrameResult, Reconstructor, RunOutcome};
+pub use rigid_jitter::rigid_residual_rms;
+pub use sink::{FrameSink, MeshFrame};
+pub use stages::Surfaces;
+
+pub use visage_camera::{DepthKind, Intrinsics, RigidTransform, DEFAULT_FOV_DEG};
+pub use visage_fem::{ClipOptions, Weights};
+pub use visage_fusion::{DepthSequence, MeshKind, MeshingOptions, DEFAULT_MAX_DEPTH_M};
+pub use visage_mesh::io::{write_ply, PlyFormat};
+pub use visage_mesh::{TriMesh, TriangulationKind};
+pub use visage_video::Frame;

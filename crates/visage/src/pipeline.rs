@@ -1,0 +1,291 @@
+//! The staged whole-clip run ([`crate::Reconstructor::run`]): three stages on their own
+//! threads, joined by bounded queues ([`QUEUE_CAPACITY`] frames each), and the sink on the
+//! calling thread, frames in input order:
+//!
+//! ```text
+//! decode ──► track + landmarks + fit ──► depth + fuse ──► record + sink (calling thread)
+//! ```
+//!
+//! Memory is flat in the clip length in streaming mode: at most `QUEUE_CAPACITY` frames wait
+//! in each queue, surface buffers travel back from the sink to the fusion for reuse, and the
+//! fusion step allocates nothing (face mesh). What grows is the per-frame record (a few
+//! hundred bytes a frame). Clip mode keeps every frame's right-hand side and streaming
+//! solution until the end (≈ 9 · 8 bytes per vertex and frame), then solves each face track
+//! and hands the meshes to the sink.
+//!
+//! Errors: a stage that fails stops and drops its queue; the stages after it finish what they
+//! received (the sink keeps what it got), the stages before it stop when their next send
+//! fails. The first error in pipeline order is the run's error.
+
+use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
+use std::time::Instant;
+
+use visage_camera::Intrinsics;
+use visage_fem::{ClipOptions, SurfaceQuality};
+use visage_fusion::ClipFrame;
+
+use crate::input::Decoded;
+use crate::landmarks::LandmarksFrame;
+use crate::metrics::{FrameMetrics, FrameQuality, RunTiming};
+use crate::process_stats::{cpu_seconds, peak_rss_mib};
+use crate::recorder::Recorder;
+use crate::sink::{FrameSink, MeshFrame};
+use crate::stages::{FaceStage, FuseStage, Surfaces, Tracked};
+use crate::{Error, Input, TemporalMode};
+
+/// Frames waiting between two stages.
+pub const QUEUE_CAPACITY: usize = 3;
+
+enum ToSink {
+    /// The mesh's triangles, sent once before its first surface.
+    Topology(Vec<[u32; 3]>),
+    /// A frame, with its surfaces when its mesh is final now (streaming mode).
+    Frame {
+        metrics: Box<FrameMetrics>,
+        landmarks: Box<LandmarksFrame>,
+        warning: Option<String>,
+        surfaces: Option<Box<Surfaces>>,
+    },
+    /// Clip mode, after the clip solve: a frame's final surfaces.
+    ClipSurfaces {
+        index: usize,
+        surfaces: Box<Surfaces>,
+        quality: (SurfaceQuality, SurfaceQuality),
+        relative_residual: f64,
+        extra_fuse_ms: f64,
+    },
+}
+
+/// What the stages run with.
+pub(crate) struct Stages {
+    pub face: FaceStage,
+    pub fuse: FuseStage,
+    pub mode: TemporalMode,
+    pub clip: ClipOptions,
+}
+
+/// Runs `input` through the stages into `sink`, recording into `recorder`. Returns the wall
+/// and CPU time and the first error.
+pub(crate) fn run_stages(
+    stages: Stages,
+    input: Input,
+    recorder: &mut Recorder,
+    triangles: &mut Vec<[u32; 3]>,
+    sink: &mut dyn FrameSink,
+) -> (RunTiming, Option<Error>) {
+    let start = Instant::now();
+    let cpu_start = cpu_seconds();
+    let Stages {
+        mut face,
+        mut fuse,
+        mode,
+        clip,
+    } = stages;
+    let k = face.k;
+    let (decoded_tx, decoded_rx) = sync_channel::<Decoded>(QUEUE_CAPACITY);
+    let (tracked_tx, tracked_rx) = sync_channel::<Tracked>(QUEUE_CAPACITY);
+    let (fused_tx, fused_rx) = sync_channel::<ToSink>(QUEUE_CAPACITY);
+    let (recycle_tx, recycle_rx) = sync_channel::<Box<Surfaces>>(2 * QUEUE_CAPACITY + 2);
+    let mut consumer = Consumer {
+        k,
+        recorder,
+        triangles,
+        sink,
+    };
+    let (errors, sink_error) = std::thread::scope(|scope| {
+        let decode = scope.spawn(move || decode_stage(input, decoded_tx));
+        let track = scope.spawn(move || track_stage(&mut face, decoded_rx, tracked_tx));
+        let fusion = scope
+            .spawn(move || fuse_stage(&mut fuse, mode, &clip, tracked_rx, fused_tx, recycle_rx));
+        let sink_error = consumer.run(fused_rx, recycle_tx).err();
+        let join = |h: std::thread::ScopedJoinHandle<'_, Result<(), Error>>, name| {
+            h.join().unwrap_or(Err(Error::Panic(name))).err()
+        };
+        (
+            [
+                join(decode, "decode"),
+                join(track, "tracking"),
+                join(fusion, "fusion"),
+            ],
+            sink_error,
+        )
+    });
+    let error = errors.into_iter().flatten().next().or(sink_error);
+    let timing = RunTiming {
+        wall_s: start.elapsed().as_secs_f64(),
+        setup_ms: 0.0,
+        cpu_s: cpu_seconds().zip(cpu_start).map(|(b, a)| b - a),
+        peak_rss_mib: peak_rss_mib(),
+    };
+    (timing, error)
+}
+
+fn decode_stage(mut input: Input, out: SyncSender<Decoded>) -> Result<(), Error> {
+    while let Some(decoded) = input.next_decoded() {
+        if out.send(decoded?).is_err() {
+            return Ok(()); // a later stage stopped
+        }
+    }
+    Ok(())
+}
+
+fn track_stage(
+    face: &mut FaceStage,
+    input: Receiver<Decoded>,
+    out: SyncSender<Tracked>,
+) -> Result<(), Error> {
+    for Decoded { frame, decode_ms } in input {
+        if out.send(face.track(&frame, decode_ms)?).is_err() {
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
+/// Clip mode: the frames of one face track (no face lost in between) and their indices.
+type ClipSegment = Vec<(usize, ClipFrame)>;
+
+fn fuse_stage(
+    fuse: &mut FuseStage,
+    mode: TemporalMode,
+    clip: &ClipOptions,
+    input: Receiver<Tracked>,
+    out: SyncSender<ToSink>,
+    recycle: Receiver<Box<Surfaces>>,
+) -> Result<(), Error> {
+    let mut segments: Vec<ClipSegment> = vec![Vec::new()];
+    let mut topology_sent = false;
+    for mut tracked in input {
+        fuse.fuse(&mut tracked)?;
+        if !topology_sent {
+            if let Some(triangles) = fuse.fusion.triangles() {
+                if out.send(ToSink::Topology(triangles.to_vec())).is_err() {
+                    return Ok(());
+                }
+                topology_sent = true;
+            }
+        }
+        let mut surfaces = None;
+        match (&tracked.face, mode) {
+            (None, _) => {
+                if segments.last().is_some_and(|s| !s.is_empty()) {
+                    segments.push(Vec::new());
+                }
+            }
+            (Some(face), TemporalMode::Streaming) if tracked.metrics.has_mesh() => {
+                let mut s = recycle.try_recv().unwrap_or_default();
+                fuse.fill_surfaces(&face.landmarks_px, &mut s);
+                surfaces = Some(s);
+            }
+            (Some(face), TemporalMode::Clip) if tracked.metrics.has_mesh() => {
+                if let Some(segment) = segments.last_mut() {
+                    segment.push((tracked.metrics.index, fuse.clip_frame(&face.landmarks_px)));
+                }
+            }
+            (Some(_), _) => {}
+        }
+        let message = ToSink::Frame {
+            metrics: Box::new(tracked.metrics),
+            landmarks: Box::new(tracked.landmarks),
+            warning: tracked.warning,
+            surfaces,
+        };
+        if out.send(message).is_err() {
+            return Ok(());
+        }
+    }
+    for segment in segments.into_iter().filter(|s| !s.is_empty()) {
+        let start = Instant::now();
+        let (indices, mut frames): (Vec<usize>, Vec<ClipFrame>) = segment.into_iter().unzip();
+        let report = fuse.fusion.solve_clip(&mut frames, clip);
+        let share = start.elapsed().as_secs_f64() * 1e3 / frames.len() as f64;
+        for (index, frame) in indices.into_iter().zip(&frames) {
+            let quality = fuse.fusion.load_clip_frame(frame);
+            let mut s = recycle.try_recv().unwrap_or_default();
+            fuse.fill_surfaces(&frame.landmarks_px, &mut s);
+            let message = ToSink::ClipSurfaces {
+                index,
+                surfaces: s,
+                quality,
+                relative_residual: report.relative_residual,
+                extra_fuse_ms: share,
+            };
+            if out.send(message).is_err() {
+                return Ok(());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The calling thread's part: records, quality figures, the sink.
+struct Consumer<'a> {
+    k: Intrinsics,
+    recorder: &'a mut Recorder,
+    triangles: &'a mut Vec<[u32; 3]>,
+    sink: &'a mut dyn FrameSink,
+}
+
+impl Consumer<'_> {
+    fn run(
+        &mut self,
+        input: Receiver<ToSink>,
+        recycle: SyncSender<Box<Surfaces>>,
+    ) -> Result<(), Error> {
+        for message in input {
+            match message {
+                ToSink::Topology(triangles) => *self.triangles = triangles,
+                ToSink::Frame {
+                    metrics,
+                    landmarks,
+                    warning,
+                    surfaces,
+                } => {
+                    let start = Instant::now();
+                    if let Some(w) = &warning {
+                        self.sink.warning(w);
+                    }
+                    self.sink.landmarks(&landmarks)?;
+                    let position = self.recorder.push(*metrics);
+                    if let Some(s) = surfaces {
+                        self.mesh(position, &s)?;
+                        let _ = recycle.try_send(s);
+                    }
+                    let m = &mut self.recorder.frames[position];
+                    m.ms.write += start.elapsed().as_secs_f64() * 1e3;
+                    self.sink.frame_done(m);
+                }
+                ToSink::ClipSurfaces {
+                    index,
+                    surfaces,
+                    quality,
+                    relative_residual,
+                    extra_fuse_ms,
+                } => {
+                    let start = Instant::now();
+                    let Some(position) = self.recorder.position(index) else {
+                        continue;
+                    };
+                    let m = &mut self.recorder.frames[position];
+                    m.quality = FrameQuality::of(&quality.0, &quality.1);
+                    m.relative_residual = relative_residual;
+                    m.ms.fuse += extra_fuse_ms;
+                    self.mesh(position, &surfaces)?;
+                    let _ = recycle.try_send(surfaces);
+                    self.recorder.frames[position].ms.write += start.elapsed().as_secs_f64() * 1e3;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Measures a meshed frame and hands it to the sink.
+    fn mesh(&mut self, position: usize, s: &Surfaces) -> Result<(), Error> {
+        self.recorder.measure(position, &self.k, s);
+        self.sink.mesh(&MeshFrame {
+            index: self.recorder.frames[position].index,
+            triangles: self.triangles,
+            surfaces: s,
+        })
+    }
+}

@@ -1,0 +1,286 @@
+//! [`Reconstructor`]: frames in, a fused metric face mesh per frame out — one frame at a time
+//! ([`Reconstructor::process`]) or a whole input on threads ([`Reconstructor::run`]).
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use visage_camera::Intrinsics;
+use visage_face::{model_files, CanonicalMesh, FaceMesh, FaceTracker};
+use visage_fusion::{FaceTemplate, SurfaceFusion};
+use visage_mesh::TriMesh;
+use visage_video::Frame;
+
+use crate::config::{Builder, Parameters};
+use crate::landmarks::LandmarksFrame;
+use crate::metrics::{FrameMetrics, MeshSummary, Report, RunStatus, RunSummary, RunTiming};
+use crate::pipeline::{run_stages, Stages};
+use crate::recorder::Recorder;
+use crate::stages::{FaceStage, FuseStage, Surfaces};
+use crate::{Error, FrameSink, Input, TemporalMode};
+
+/// The video pipeline: face tracking, landmarks and the metric face fit, depth, and fusion into
+/// a temporally stable metric surface on a fixed mesh. Set up once ([`Reconstructor::builder`]:
+/// models loaded, operators assembled and factored), then fed frames.
+pub struct Reconstructor {
+    face: FaceStage,
+    fuse: FuseStage,
+    mode: TemporalMode,
+    clip: visage_fem::ClipOptions,
+    parameters: Parameters,
+    setup_ms: f64,
+    recorder: Recorder,
+    /// The last frame's results (reused buffers).
+    surfaces: Surfaces,
+    mesh: TriMesh,
+    landmarks: Option<LandmarksFrame>,
+    warning: Option<String>,
+}
+
+/// One frame's results from [`Reconstructor::process`].
+#[derive(Debug)]
+pub struct FrameResult<'a> {
+    /// Status, stage times, solver and surface figures, head pose.
+    pub metrics: &'a FrameMetrics,
+    /// The tracked face (468 landmarks, frame pixels) and its metric head pose.
+    pub landmarks: &'a LandmarksFrame,
+    /// Why the frame has no mesh, or a problem worth a warning.
+    pub warning: Option<&'a str>,
+    mesh: Option<&'a TriMesh>,
+    surfaces: Option<&'a Surfaces>,
+}
+
+impl<'a> FrameResult<'a> {
+    /// Input frame index.
+    pub fn index(&self) -> usize {
+        self.metrics.index
+    }
+
+    /// The fused metric mesh (camera coordinates: x right, y down, z forward; metres), when
+    /// the frame has one.
+    pub fn mesh(&self) -> Option<&'a TriMesh> {
+        self.mesh
+    }
+
+    /// Fused and raw surfaces, on the mesh and at the landmarks, when the frame has a mesh.
+    pub fn surfaces(&self) -> Option<&'a Surfaces> {
+        self.surfaces
+    }
+}
+
+/// What a whole-input run did.
+pub struct RunOutcome {
+    /// Per-frame records, in input order (those of earlier `process` calls included).
+    pub frames: Vec<FrameMetrics>,
+    pub summary: RunSummary,
+    /// The error that stopped the run; the frames before it were processed and handed over.
+    pub error: Option<Error>,
+    pub parameters: Parameters,
+    pub intrinsics: Intrinsics,
+    pub mesh: MeshSummary,
+}
+
+impl RunOutcome {
+    /// The `metrics.json` record of the run of `input`.
+    pub fn report(&self, input: &str) -> Report<&Parameters> {
+        Report {
+            status: if self.error.is_some() {
+                RunStatus::Failed
+            } else {
+                RunStatus::Complete
+            },
+            error: self.error.as_ref().map(|e| error_chain(e)),
+            input: input.to_owned(),
+            intrinsics: self.intrinsics,
+            parameters: &self.parameters,
+            mesh: self.mesh.clone(),
+            solver: None,
+            summary: self.summary.clone(),
+            frames: self.frames.clone(),
+        }
+    }
+}
+
+/// An error and its causes, `: `-separated.
+pub fn error_chain(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        text.push_str(": ");
+        text.push_str(&c.to_string());
+        cause = c.source();
+    }
+    text
+}
+
+impl Reconstructor {
+    /// Options with defaults; finish with [`Builder::build`] or [`Builder::build_for`].
+    pub fn builder() -> Builder {
+        Builder::default()
+    }
+
+    pub(crate) fn new(builder: Builder, k: Intrinsics) -> Result<Reconstructor, Error> {
+        let start = Instant::now();
+        let params = builder.fusion_params()?;
+        let models = builder
+            .models
+            .clone()
+            .unwrap_or_else(model_files::models_dir);
+        let canonical = Arc::new(CanonicalMesh::load(&models)?);
+        let tracker = FaceTracker::new(FaceMesh::load(&models)?);
+        let template = FaceTemplate {
+            vertices: &canonical.vertices,
+            triangles: &canonical.triangles,
+        };
+        let fusion = SurfaceFusion::new(params, template, k)?;
+        let parameters = Parameters {
+            fusion: params,
+            mode: builder.mode,
+            depth: builder.depth.describe(),
+        };
+        let mut mesh = TriMesh::new(Vec::new(), Vec::new());
+        if let Some(t) = fusion.triangles() {
+            mesh.triangles = t.to_vec();
+        }
+        Ok(Reconstructor {
+            face: FaceStage {
+                k,
+                canonical: canonical.clone(),
+                tracker,
+            },
+            fuse: FuseStage {
+                k,
+                canonical,
+                depth: builder.depth,
+                fusion,
+            },
+            mode: builder.mode,
+            clip: builder.clip,
+            parameters,
+            setup_ms: start.elapsed().as_secs_f64() * 1e3,
+            recorder: Recorder::default(),
+            surfaces: Surfaces::default(),
+            mesh,
+            landmarks: None,
+            warning: None,
+        })
+    }
+
+    /// The camera the meshes are in.
+    pub fn intrinsics(&self) -> &Intrinsics {
+        &self.face.k
+    }
+
+    /// The parameters, as `metrics.json` records them.
+    pub fn parameters(&self) -> &Parameters {
+        &self.parameters
+    }
+
+    /// Vertices of the mesh (the image-plane mesh: 0 before its first face).
+    pub fn vertex_count(&self) -> usize {
+        self.fuse.fusion.vertex_count()
+    }
+
+    /// The records of the frames processed so far, in input order.
+    pub fn frames(&self) -> &[FrameMetrics] {
+        &self.recorder.frames
+    }
+
+    /// Processes one frame, causally (streaming: clip mode needs the whole input, see
+    /// [`Reconstructor::run`]). Frames must come in input order. A frame without a face has
+    /// no mesh and restarts the temporal history.
+    ///
+    /// # Errors
+    /// A frame of another size than the camera's, a network or fusion failure.
+    pub fn process(&mut self, frame: &Frame) -> Result<FrameResult<'_>, Error> {
+        let mut tracked = self.face.track(frame, 0.0)?;
+        self.fuse.fuse(&mut tracked)?;
+        let has_mesh = tracked.metrics.has_mesh();
+        let position = self.recorder.push(tracked.metrics);
+        if let (true, Some(face)) = (has_mesh, &tracked.face) {
+            let start = Instant::now();
+            self.fuse
+                .fill_surfaces(&face.landmarks_px, &mut self.surfaces);
+            self.recorder
+                .measure(position, &self.face.k, &self.surfaces);
+            if self.mesh.triangles.is_empty() {
+                if let Some(t) = self.fuse.fusion.triangles() {
+                    self.mesh.triangles = t.to_vec();
+                }
+            }
+            self.mesh.vertices.clear();
+            self.mesh.vertices.extend_from_slice(&self.surfaces.fused);
+            self.recorder.frames[position].ms.write = start.elapsed().as_secs_f64() * 1e3;
+        }
+        self.warning = tracked.warning;
+        let landmarks = self.landmarks.insert(tracked.landmarks);
+        Ok(FrameResult {
+            metrics: &self.recorder.frames[position],
+            landmarks,
+            warning: self.warning.as_deref(),
+            mesh: has_mesh.then_some(&self.mesh),
+            surfaces: has_mesh.then_some(&self.surfaces),
+        })
+    }
+
+    /// Processes every frame of `input` in the configured mode and hands the results to `sink`
+    /// in input order: decoding, tracking and fusion run on their own threads. Stops at the
+    /// first error (in `RunOutcome::error`); what came before is kept.
+    pub fn run(self, input: Input, sink: &mut dyn FrameSink) -> RunOutcome {
+        let Reconstructor {
+            face,
+            fuse,
+            mode,
+            clip,
+            parameters,
+            setup_ms,
+            mut recorder,
+            mesh,
+            ..
+        } = self;
+        let k = face.k;
+        let vertices_before = fuse.fusion.vertex_count();
+        let mut triangles = mesh.triangles;
+        let stages = Stages {
+            face,
+            fuse,
+            mode,
+            clip,
+        };
+        let (timing, error) = run_stages(stages, input, &mut recorder, &mut triangles, sink);
+        let summary = recorder.summary(RunTiming { setup_ms, ..timing });
+        RunOutcome {
+            mesh: MeshSummary {
+                vertices: recorder.vertices.max(vertices_before),
+                triangles: triangles.len(),
+                ..MeshSummary::default()
+            },
+            frames: recorder.frames,
+            summary,
+            error,
+            parameters,
+            intrinsics: k,
+        }
+    }
+}
+
+impl Builder {
+    /// A reconstructor for frames of `width × height` pixels ([`crate::Camera::Auto`]: the
+    /// default field of view).
+    ///
+    /// # Errors
+    /// Invalid options, intrinsics for another size, missing or corrupt model files.
+    pub fn build(self, width: u32, height: u32) -> Result<Reconstructor, Error> {
+        let k = self.intrinsics_for(width, height, None)?;
+        Reconstructor::new(self, k)
+    }
+
+    /// A reconstructor for `input`'s frames ([`crate::Camera::Auto`]: an image input's EXIF
+    /// focal length when it has one).
+    ///
+    /// # Errors
+    /// As [`Builder::build`].
+    pub fn build_for(self, input: &Input) -> Result<Reconstructor, Error> {
+        let k = self.intrinsics_for_input(input)?;
+        Reconstructor::new(self, k)
+    }
+}

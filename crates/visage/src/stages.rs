@@ -1,0 +1,231 @@
+//! The two halves of a frame's work, used alike by [`crate::Reconstructor::process`] (one
+//! thread) and by the staged whole-clip run ([`crate::pipeline`], one thread each):
+//! [`FaceStage`] tracks the face, regresses its landmarks and fits the metric face;
+//! [`FuseStage`] gets the frame's depth and fuses it into the surface.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use visage_camera::{DepthKind, DepthMap, Intrinsics};
+use visage_face::{
+    fit_face_geometry, render_faces_depth, CanonicalMesh, FaceGeometry, FaceTracker,
+};
+use visage_fusion::{ClipFrame, FaceFrame, FusedSurfaces, MeshKind, SurfaceFusion};
+use visage_video::Frame;
+
+use crate::landmarks::{FaceRecord, LandmarksFrame};
+use crate::metrics::{FrameMetrics, FrameQuality, FrameStatus, PoseMetrics};
+use crate::{DepthSource, Error};
+
+/// A face found and fitted in a frame.
+pub(crate) struct TrackedFace {
+    /// The 468 landmarks, frame pixels.
+    pub landmarks_px: Vec<[f64; 2]>,
+    pub geometry: FaceGeometry,
+    /// `[x, y, w, h]`, frame pixels.
+    pub face_box: [f32; 4],
+}
+
+/// A frame after [`FaceStage::track`].
+pub(crate) struct Tracked {
+    /// The frame's record, stage times up to the fit filled in.
+    pub metrics: FrameMetrics,
+    pub face: Option<TrackedFace>,
+    pub landmarks: LandmarksFrame,
+    /// Warnings for the user (no face, no metric fit).
+    pub warning: Option<String>,
+}
+
+/// Face tracking, landmarks and the metric face fit.
+pub(crate) struct FaceStage {
+    pub k: Intrinsics,
+    pub canonical: Arc<CanonicalMesh>,
+    pub tracker: FaceTracker,
+}
+
+impl FaceStage {
+    /// Tracks the face in `frame` and fits the metric face to its landmarks.
+    pub fn track(&mut self, frame: &Frame, decode_ms: f64) -> Result<Tracked, Error> {
+        let (w, h) = frame.image.dimensions();
+        self.k
+            .check_size(w, h)
+            .map_err(|e| Error::on_frame(&frame.source, "intrinsics do not fit the frame", e))?;
+        let t = Instant::now();
+        let step = self
+            .tracker
+            .track(&frame.image)
+            .map_err(|e| Error::on_frame(&frame.source, "face tracking", e))?;
+        let track_ms = t.elapsed().as_secs_f64() * 1e3;
+        let t = Instant::now();
+        let mut faces = Vec::new();
+        let mut warning = None;
+        let face = match step.face {
+            Some(face) => {
+                match fit_face_geometry(&self.canonical, &face.landmarks.points, &self.k) {
+                    Ok(geometry) => {
+                        faces.push(FaceRecord::new(&face, Some(&geometry)));
+                        Some(TrackedFace {
+                            landmarks_px: face
+                                .landmarks
+                                .points
+                                .iter()
+                                .map(|p| [p[0] as f64, p[1] as f64])
+                                .collect(),
+                            geometry,
+                            face_box: face.bbox,
+                        })
+                    }
+                    Err(e) => {
+                        faces.push(FaceRecord::new(&face, None));
+                        warning = Some(format!("{}: no metric fit: {e}", frame.source));
+                        None
+                    }
+                }
+            }
+            None => {
+                warning = Some(format!("{}: no face found; no mesh", frame.source));
+                None
+            }
+        };
+        let mut metrics = FrameMetrics::new(frame.index, frame.source.clone(), FrameStatus::NoFace);
+        metrics.detector_ran = Some(step.detector_ran);
+        metrics.ms.decode = decode_ms;
+        metrics.ms.track = track_ms;
+        metrics.ms.fit = t.elapsed().as_secs_f64() * 1e3;
+        Ok(Tracked {
+            metrics,
+            face,
+            landmarks: LandmarksFrame {
+                source: frame.source.clone(),
+                index: frame.index,
+                width: w,
+                height: h,
+                faces,
+            },
+            warning,
+        })
+    }
+}
+
+/// One frame's surfaces (buffers reused from frame to frame): fused and raw on the mesh, both
+/// at the 468 landmarks, and the tracked landmark pixels.
+#[derive(Clone, Debug, Default)]
+pub struct Surfaces {
+    /// #V camera-space points, metres.
+    pub fused: Vec<[f64; 3]>,
+    /// The unfused surface on the same mesh.
+    pub raw: Vec<[f64; 3]>,
+    /// The fused and raw surfaces at the 468 landmarks (NaN where a landmark falls outside
+    /// the image-plane mesh).
+    pub fused_landmarks: Vec<[f64; 3]>,
+    pub raw_landmarks: Vec<[f64; 3]>,
+    /// The tracked landmarks, frame pixels.
+    pub landmarks_px: Vec<[f64; 2]>,
+}
+
+/// Depth and fusion.
+pub(crate) struct FuseStage {
+    pub k: Intrinsics,
+    pub canonical: Arc<CanonicalMesh>,
+    pub depth: DepthSource,
+    pub fusion: SurfaceFusion,
+}
+
+impl FuseStage {
+    /// Fuses a tracked frame and fills in its record. A frame without a face resets the
+    /// fusion's history.
+    pub fn fuse(&mut self, tracked: &mut Tracked) -> Result<(), Error> {
+        let metrics = &mut tracked.metrics;
+        let Some(face) = &tracked.face else {
+            self.fusion.reset();
+            return Ok(());
+        };
+        metrics.pose = Some(PoseMetrics::of(&face.geometry.pose));
+        metrics.fit_rms_px = Some(face.geometry.rms_px);
+        let start = Instant::now();
+        let folder_map = match &self.depth {
+            DepthSource::Folder(seq) => Some(
+                read_depth(seq, metrics.index, &self.k)
+                    .map_err(|e| Error::on_frame(&metrics.source, "depth", e))?,
+            ),
+            DepthSource::Face => None,
+        };
+        let needs_render = self.fusion.needs_face_mask()
+            || (self.fusion.mesh() == MeshKind::Image && folder_map.is_none());
+        let rendered = if needs_render {
+            Some(
+                render_faces_depth(
+                    std::slice::from_ref(&face.geometry),
+                    &self.canonical,
+                    &self.k,
+                    DepthKind::Z,
+                )
+                .map_err(|e| Error::on_frame(&metrics.source, "face depth", e))?,
+            )
+        } else {
+            None
+        };
+        metrics.ms.depth = start.elapsed().as_secs_f64() * 1e3;
+        let depth_map = match (&folder_map, self.fusion.mesh()) {
+            (Some(map), _) => Some(map),
+            (None, MeshKind::Image) => rendered.as_ref(),
+            (None, MeshKind::Face) => None,
+        };
+        let start = Instant::now();
+        let FusedSurfaces {
+            frame,
+            raw_quality,
+            fused_quality,
+        } = self
+            .fusion
+            .process(&FaceFrame {
+                landmarks_px: &face.landmarks_px,
+                pose: face.geometry.pose,
+                metric_landmarks: &face.geometry.metric_landmarks,
+                depth_map,
+                face_mask: rendered.as_ref().map(|r| (r, face.face_box)),
+            })
+            .map_err(|e| Error::on_frame(&metrics.source, "fusion", e))?;
+        metrics.ms.fuse = start.elapsed().as_secs_f64() * 1e3;
+        metrics.status = frame.status.into();
+        metrics.valid_fraction = frame.valid_fraction;
+        metrics.relative_residual = frame.relative_residual;
+        metrics.quality = FrameQuality::of(&raw_quality, &fused_quality);
+        Ok(())
+    }
+
+    /// Copies the current surfaces into `s` (the frame just fused, or a loaded clip frame).
+    pub fn fill_surfaces(&self, landmarks_px: &[[f64; 2]], s: &mut Surfaces) {
+        s.fused.clear();
+        s.fused.extend_from_slice(self.fusion.fused());
+        s.raw.clear();
+        s.raw.extend_from_slice(self.fusion.raw());
+        s.landmarks_px.clear();
+        s.landmarks_px.extend_from_slice(landmarks_px);
+        self.fusion
+            .landmark_points(landmarks_px, &mut s.fused_landmarks, &mut s.raw_landmarks);
+    }
+
+    /// The state the clip solve keeps for the frame just fused.
+    pub fn clip_frame(&self, landmarks_px: &[[f64; 2]]) -> ClipFrame {
+        self.fusion.clip_frame(landmarks_px)
+    }
+}
+
+fn read_depth(
+    seq: &visage_fusion::DepthSequence,
+    index: usize,
+    k: &Intrinsics,
+) -> Result<DepthMap, Error> {
+    if index >= seq.frames.len() {
+        return Err(Error::MissingDepth {
+            dir: seq.dir.clone(),
+            frames: seq.frames.len(),
+            index,
+        });
+    }
+    let map = seq.read(index)?;
+    k.check_size(map.width, map.height)
+        .map_err(|e| Error::on_frame(&seq.frames[index].display().to_string(), "depth frame", e))?;
+    Ok(map)
+}
