@@ -1,46 +1,36 @@
 //! `visage landmarks` as a user runs it: JSON on a real portrait, a face-less image, bad input,
-//! and the depth maps it writes fused by `visage fuse`. Needs the model files (run
-//! `scripts/setup.sh`) and `../shared`; skipped visibly without them.
+//! and the depth maps it writes fused by `visage fuse`. Most need the model files (run
+//! `scripts/setup.sh`) and `../shared`, and are ignored without them.
 
 mod common;
 
 use common::{s, visage};
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+/// The model folder (the tests using it are ignored without it).
+#[track_caller]
+fn models() -> PathBuf {
+    let dir = visage_testdata::models_dir();
+    for file in visage_testdata::MODEL_FILES {
+        visage_testdata::require(dir.join(file));
+    }
+    dir
 }
 
-fn models() -> Option<PathBuf> {
-    let dir =
-        std::env::var_os("VISAGE_MODELS").map_or_else(|| repo().join("models"), PathBuf::from);
-    if visage_face::model_files::models_present(&dir) {
-        Some(dir)
-    } else {
-        println!(
-            "SKIPPED: model files not found in {} (run scripts/setup.sh)",
-            dir.display()
-        );
-        None
-    }
-}
-
-fn portrait() -> Option<PathBuf> {
-    let p = repo().join("../shared/data/images/astronaut.png");
-    if p.exists() {
-        Some(p)
-    } else {
-        println!("SKIPPED: ../shared not found");
-        None
-    }
+/// The astronaut portrait in `../shared` (the tests using it are ignored without it).
+#[track_caller]
+fn portrait() -> PathBuf {
+    visage_testdata::require(visage_testdata::shared_dir().join("data/images/astronaut.png"))
 }
 
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files)),
+    ignore = "needs ../shared and the model files (scripts/setup.sh)"
+)]
 fn landmarks_json_on_a_portrait() {
-    let (Some(models), Some(image)) = (models(), portrait()) else {
-        return;
-    };
+    let (models, image) = (models(), portrait());
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("lm.json");
     let o = visage(&[
@@ -73,8 +63,9 @@ fn landmarks_json_on_a_portrait() {
 }
 
 #[test]
+#[cfg_attr(not(model_files), ignore = "needs the model files (scripts/setup.sh)")]
 fn an_image_without_a_face_gives_no_faces_and_exit_0() {
-    let Some(models) = models() else { return };
+    let models = models();
     let tmp = tempfile::tempdir().unwrap();
     let blank = tmp.path().join("blank.png");
     image::RgbImage::from_pixel(160, 120, image::Rgb([90, 120, 200]))
@@ -110,18 +101,26 @@ fn missing_models_and_unreadable_images_exit_2_naming_the_file() {
         err.contains("models fetch") || err.contains("broken.png"),
         "{err}"
     );
-    if let Some(models) = models() {
-        let o = visage(&["landmarks", s(&broken), "--models", s(&models)]);
-        assert_eq!(o.status.code(), Some(2));
-        assert!(String::from_utf8_lossy(&o.stderr).contains("broken.png"));
-    }
 }
 
 #[test]
+#[cfg_attr(not(model_files), ignore = "needs the model files (scripts/setup.sh)")]
+fn an_unreadable_image_with_the_models_is_exit_2_naming_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let broken = tmp.path().join("broken.png");
+    std::fs::write(&broken, b"not a png").unwrap();
+    let o = visage(&["landmarks", s(&broken), "--models", s(&models())]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("broken.png"));
+}
+
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files)),
+    ignore = "needs ../shared and the model files (scripts/setup.sh)"
+)]
 fn landmark_depth_maps_fuse_into_a_metric_face() {
-    let (Some(models), Some(image)) = (models(), portrait()) else {
-        return;
-    };
+    let (models, image) = (models(), portrait());
     let tmp = tempfile::tempdir().unwrap();
     let frames = tmp.path().join("frames");
     std::fs::create_dir_all(&frames).unwrap();

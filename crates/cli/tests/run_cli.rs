@@ -1,7 +1,7 @@
 //! `visage run` and `visage bench` as a user runs them, on a real clip: outputs per frame, both
-//! mesh designs, clip mode, and the bad inputs of issue #6 (missing input, truncated video, a
-//! frame without a face, intrinsics for another size, unwritable output). Needs the model files
-//! (`scripts/setup.sh`), FFmpeg and `../shared`; skipped visibly without them.
+//! mesh designs, clip mode, and bad inputs (missing input, truncated video, a
+//! frame without a face, intrinsics for another size, unwritable output). Most need the model
+//! files (`scripts/setup.sh`), FFmpeg and `../shared`, and are ignored without them.
 
 mod common;
 
@@ -11,31 +11,17 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-/// The model folder and the 480×480 sample clip, or `None` (with a SKIPPED line).
-fn inputs() -> Option<(PathBuf, PathBuf)> {
-    let models =
-        std::env::var_os("VISAGE_MODELS").map_or_else(|| repo().join("models"), PathBuf::from);
-    if !visage_face::model_files::models_present(&models) {
-        eprintln!(
-            "SKIPPED: model files not found in {} (run scripts/setup.sh)",
-            models.display()
-        );
-        return None;
+/// The model folder and the 480×480 sample clip (the tests using them are ignored without them
+/// or without FFmpeg).
+#[track_caller]
+fn inputs() -> (PathBuf, PathBuf) {
+    let models = visage_testdata::models_dir();
+    for file in visage_testdata::MODEL_FILES {
+        visage_testdata::require(models.join(file));
     }
-    let clip = repo().join("../shared/data/video/lp_d18.mp4");
-    if !clip.exists() {
-        eprintln!("SKIPPED: ../shared/data/video/lp_d18.mp4 not found");
-        return None;
-    }
-    if !visage_video::ffmpeg_available() {
-        eprintln!("SKIPPED: FFmpeg not installed");
-        return None;
-    }
-    Some((models, clip))
+    let clip =
+        visage_testdata::require(visage_testdata::shared_dir().join("data/video/lp_d18.mp4"));
+    (models, clip)
 }
 
 fn json(path: &Path) -> Value {
@@ -53,10 +39,12 @@ fn ply_count(dir: &Path) -> usize {
 }
 
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
 fn a_short_clip_gives_a_mesh_landmarks_and_metrics_per_frame() {
-    let Some((models, clip)) = inputs() else {
-        return;
-    };
+    let (models, clip) = inputs();
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("out");
     run_ok(&[
@@ -123,10 +111,12 @@ fn a_short_clip_gives_a_mesh_landmarks_and_metrics_per_frame() {
 }
 
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
 fn image_mesh_and_clip_mode_run() {
-    let Some((models, clip)) = inputs() else {
-        return;
-    };
+    let (models, clip) = inputs();
     let tmp = tempfile::tempdir().unwrap();
     for (name, extra) in [("image", ["--mesh", "image"]), ("clip", ["--mode", "clip"])] {
         let out = tmp.path().join(name);
@@ -152,10 +142,12 @@ fn image_mesh_and_clip_mode_run() {
 }
 
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
 fn bench_prints_stage_percentiles() {
-    let Some((models, clip)) = inputs() else {
-        return;
-    };
+    let (models, clip) = inputs();
     let o = visage(&[
         "bench",
         s(&clip),
@@ -183,10 +175,12 @@ fn a_missing_input_is_exit_2_naming_it() {
 }
 
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
 fn a_truncated_video_keeps_the_readable_frames_and_names_the_break() {
-    let Some((models, clip)) = inputs() else {
-        return;
-    };
+    let (models, clip) = inputs();
     let tmp = tempfile::tempdir().unwrap();
     // The first 24 frames with the index up front (faststart), cut in the middle of the data.
     let full = tmp.path().join("full.mp4");
@@ -250,10 +244,12 @@ fn a_truncated_video_keeps_the_readable_frames_and_names_the_break() {
 }
 
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
 fn a_frame_without_a_face_gets_no_mesh_and_tracking_reacquires() {
-    let Some((models, clip)) = inputs() else {
-        return;
-    };
+    let (models, clip) = inputs();
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("frames");
     std::fs::create_dir(&dir).unwrap();
@@ -290,10 +286,12 @@ fn a_frame_without_a_face_gets_no_mesh_and_tracking_reacquires() {
 }
 
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
 fn intrinsics_for_another_size_are_exit_2_naming_the_file() {
-    let Some((models, clip)) = inputs() else {
-        return;
-    };
+    let (models, clip) = inputs();
     let tmp = tempfile::tempdir().unwrap();
     let cam = tmp.path().join("cam.json");
     std::fs::write(
@@ -318,10 +316,12 @@ fn intrinsics_for_another_size_are_exit_2_naming_the_file() {
 }
 
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
 fn an_unwritable_output_folder_is_exit_2() {
-    let Some((models, clip)) = inputs() else {
-        return;
-    };
+    let (models, clip) = inputs();
     let tmp = tempfile::tempdir().unwrap();
     let file = tmp.path().join("a_file");
     std::fs::write(&file, b"x").unwrap();

@@ -2,31 +2,22 @@
 //! canonical face: the canonical FaceMesh lands on the ICT face where both models put the same
 //! landmarks, and the simulated tracker reports what it sees.
 
-use std::path::{Path, PathBuf};
-
 use visage_eval::canonical_correspondence::LANDMARK_PAIRS;
 use visage_eval::{synthesize, BenchmarkConfig, FaceAnchoring, TrackerNoise};
 use visage_face::CanonicalMesh;
 use visage_morphable::IctModel;
 
-fn inputs() -> Option<(IctModel, CanonicalMesh)> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let dir = root.join("../../../shared/data/ict-facekit/FaceXModel");
-    if !dir.join("generic_neutral_mesh.obj").is_file() {
-        eprintln!("SKIPPED: ../shared not found");
-        return None;
-    }
-    let models =
-        std::env::var_os("VISAGE_MODELS").map_or_else(|| root.join("../../models"), PathBuf::from);
-    let Ok(canonical) = CanonicalMesh::load(&models) else {
-        eprintln!(
-            "SKIPPED: model files not found in {} (run scripts/setup.sh)",
-            models.display()
-        );
-        return None;
-    };
+/// The ICT-FaceKit subset in `../shared` and the canonical face from the model files (tests
+/// using them are ignored without them).
+#[track_caller]
+fn inputs() -> (IctModel, CanonicalMesh) {
+    let dir = visage_testdata::shared_dir().join("data/ict-facekit/FaceXModel");
+    visage_testdata::require(dir.join("generic_neutral_mesh.obj"));
+    let models = visage_testdata::models_dir();
+    visage_testdata::require(models.join("geometry_pipeline_metadata_landmarks.binarypb"));
+    let canonical = CanonicalMesh::load(&models).unwrap();
     let model = IctModel::load_with(&dir, &BenchmarkConfig::quick().import).unwrap();
-    Some((model, canonical))
+    (model, canonical)
 }
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -36,10 +27,12 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// Measured: alignment RMS 3.0 mm (eye corners 1 mm, nose tip 3 mm), scale 0.96, every
 /// canonical vertex within 4.9 mm of the ICT face (median 1.1 mm).
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files)),
+    ignore = "needs ../shared and the model files (scripts/setup.sh)"
+)]
 fn canonical_face_lands_on_the_ict_face() {
-    let Some((model, canonical)) = inputs() else {
-        return;
-    };
+    let (model, canonical) = inputs();
     let a = FaceAnchoring::new(&model, canonical, 1).unwrap();
     let c = &a.correspondence;
     assert!(c.landmark_rms_m < 0.005, "{}", c.landmark_rms_m);
@@ -64,10 +57,12 @@ fn canonical_face_lands_on_the_ict_face() {
 /// the canonical face where the ICT face is (to the two faces' shape difference); with noise
 /// the landmarks scatter by about the configured σ, the same seed gives the same track.
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files)),
+    ignore = "needs ../shared and the model files (scripts/setup.sh)"
+)]
 fn simulated_tracker_sees_the_truth_with_the_configured_noise() {
-    let Some((model, canonical)) = inputs() else {
-        return;
-    };
+    let (model, canonical) = inputs();
     let a = FaceAnchoring::new(&model, canonical, 1).unwrap();
     let config = visage_eval::SynthesisConfig {
         frames: 6,

@@ -1,26 +1,24 @@
 //! Synthesis on the shared ICT-FaceKit subset: seeded, within the configured ranges, and its
 //! ground truth consistent (rendered depth lies on the posed mesh; the face mask is the face).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use visage_eval::point_to_mesh::TriangleGrid;
 use visage_eval::{synthesize, BenchmarkConfig, SynthesisConfig};
 use visage_morphable::IctModel;
 
-fn shared_model() -> Option<PathBuf> {
-    let dir =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/ict-facekit/FaceXModel");
-    if dir.join("generic_neutral_mesh.obj").is_file() {
-        Some(dir)
-    } else {
-        println!("SKIPPED: ../shared not found");
-        None
-    }
+/// The ICT-FaceKit subset in `../shared` (tests using it are ignored without it).
+#[track_caller]
+fn shared_model() -> PathBuf {
+    let dir = visage_testdata::shared_dir().join("data/ict-facekit/FaceXModel");
+    visage_testdata::require(dir.join("generic_neutral_mesh.obj"));
+    dir
 }
 
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs ../shared beside the checkout")]
 fn sequences_are_seeded_in_range_and_consistent_with_their_render() {
-    let Some(dir) = shared_model() else { return };
+    let dir = shared_model();
     let model = IctModel::load_with(&dir, &BenchmarkConfig::quick().import).unwrap();
     let config = SynthesisConfig {
         frames: 40,

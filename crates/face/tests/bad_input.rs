@@ -6,16 +6,16 @@ mod common;
 use image::{imageops, RgbImage};
 use visage_face::{FaceError, FaceMesh, LandmarkNetwork, ModelFile};
 
-fn astronaut() -> Option<RgbImage> {
-    let p = common::data_dir()?.join("images/astronaut.png");
-    Some(image::open(p).ok()?.to_rgb8())
+#[track_caller]
+fn astronaut() -> RgbImage {
+    let p = visage_testdata::require(common::data_dir().join("images/astronaut.png"));
+    image::open(p).unwrap().to_rgb8()
 }
 
 #[test]
+#[cfg_attr(not(model_files), ignore = "needs the model files (scripts/setup.sh)")]
 fn an_image_without_a_face_gives_no_face() {
-    let Some(models) = common::models_dir() else {
-        return;
-    };
+    let models = common::models_dir();
     let mut mesh = FaceMesh::load(&models).unwrap();
     let grey = RgbImage::from_pixel(320, 240, image::Rgb([128, 128, 128]));
     assert!(mesh.process(&grey).unwrap().is_empty());
@@ -30,10 +30,12 @@ fn an_image_without_a_face_gives_no_face() {
 }
 
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files)),
+    ignore = "needs ../shared and the model files (scripts/setup.sh)"
+)]
 fn several_faces_are_all_reported_highest_score_first() {
-    let (Some(models), Some(img)) = (common::models_dir(), astronaut()) else {
-        return;
-    };
+    let (models, img) = (common::models_dir(), astronaut());
     let mut mesh = FaceMesh::load(&models).unwrap();
     let single = mesh.process(&img).unwrap();
     assert_eq!(single.len(), 1);
@@ -67,10 +69,12 @@ fn several_faces_are_all_reported_highest_score_first() {
 }
 
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files)),
+    ignore = "needs ../shared and the model files (scripts/setup.sh)"
+)]
 fn a_tiny_face_is_found_or_cleanly_missed_and_a_border_face_is_tracked() {
-    let (Some(models), Some(img)) = (common::models_dir(), astronaut()) else {
-        return;
-    };
+    let (models, img) = (common::models_dir(), astronaut());
     let mut mesh = FaceMesh::load(&models).unwrap();
     // Tiny: the whole 512² portrait shrunk into 96² (face ≈ 18 px) on a larger canvas.
     let small = imageops::resize(&img, 96, 96, imageops::FilterType::Triangle);
@@ -101,10 +105,9 @@ fn a_tiny_face_is_found_or_cleanly_missed_and_a_border_face_is_tracked() {
 }
 
 #[test]
+#[cfg_attr(not(model_files), ignore = "needs the model files (scripts/setup.sh)")]
 fn corrupt_or_truncated_model_files_are_named() {
-    let Some(models) = common::models_dir() else {
-        return;
-    };
+    let models = common::models_dir();
     let dir = tempfile::tempdir().unwrap();
     let bytes = std::fs::read(models.join("face_landmark.tflite")).unwrap();
     std::fs::write(

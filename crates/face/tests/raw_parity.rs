@@ -6,10 +6,12 @@ mod common;
 use visage_face::LandmarkNetwork;
 
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files)),
+    ignore = "needs ../shared and the model files (scripts/setup.sh)"
+)]
 fn landmark_network_matches_tflite_on_every_case() {
-    let (Some(reference), Some(models)) = (common::reference_dir(), common::models_dir()) else {
-        return;
-    };
+    let (reference, models) = (common::reference_dir(), common::models_dir());
     let mut net = LandmarkNetwork::load(&models).unwrap();
     let mut worst = 0.0f64;
     for case in common::cases(&reference) {
@@ -43,10 +45,12 @@ fn landmark_network_matches_tflite_on_every_case() {
 }
 
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files)),
+    ignore = "needs ../shared and the model files (scripts/setup.sh)"
+)]
 fn detector_best_anchor_matches_tflite_on_every_case() {
-    let (Some(reference), Some(models)) = (common::reference_dir(), common::models_dir()) else {
-        return;
-    };
+    let (reference, models) = (common::reference_dir(), common::models_dir());
     let mut det = visage_face::FaceDetector::load(&models).unwrap();
     for case in common::cases(&reference) {
         let input = common::read_rgb(reference.join(&case).join("det128.png"));

@@ -4,17 +4,15 @@
 mod common;
 
 use visage_face::{FaceMesh, FaceTracker};
-use visage_video::{ffmpeg_available, FrameSource};
+use visage_video::FrameSource;
 
 #[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
 fn both_clips_are_tracked_in_every_frame() {
-    let (Some(data), Some(models)) = (common::data_dir(), common::models_dir()) else {
-        return;
-    };
-    if !ffmpeg_available() {
-        println!("SKIPPED: ffmpeg not installed");
-        return;
-    }
+    let (data, models) = (common::data_dir(), common::models_dir());
     for clip in ["lp_d13.mp4", "lp_d18.mp4"] {
         let mut tracker = FaceTracker::new(FaceMesh::load(&models).unwrap());
         let mut missing = Vec::new();

@@ -1,4 +1,4 @@
-//! Face-anchored fusion with the pose-compensated temporal term (issue #6): the rigid-motion
+//! Face-anchored fusion with the pose-compensated temporal term (ERRATA 17): the rigid-motion
 //! commutation the design rests on, no lag under head motion, noise reduction, holes.
 
 #[path = "common/face_scene.rs"]

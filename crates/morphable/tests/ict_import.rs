@@ -6,15 +6,12 @@ use std::path::{Path, PathBuf};
 use visage_mesh::io::{read_obj_with, ObjReadOptions};
 use visage_morphable::{IctModel, ImportOptions, MorphableError, Region, LANDMARK_COUNT};
 
-fn shared_model() -> Option<PathBuf> {
-    let dir =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/ict-facekit/FaceXModel");
-    if dir.join("generic_neutral_mesh.obj").is_file() {
-        Some(dir)
-    } else {
-        println!("SKIPPED: ../shared not found");
-        None
-    }
+/// The ICT-FaceKit subset in `../shared` (tests using it are ignored without it).
+#[track_caller]
+fn shared_model() -> PathBuf {
+    let dir = visage_testdata::shared_dir().join("data/ict-facekit/FaceXModel");
+    visage_testdata::require(dir.join("generic_neutral_mesh.obj"));
+    dir
 }
 
 fn small() -> ImportOptions {
@@ -25,8 +22,9 @@ fn small() -> ImportOptions {
 }
 
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs ../shared beside the checkout")]
 fn imports_the_shared_subset_in_metres_with_triangulated_quads() {
-    let Some(dir) = shared_model() else { return };
+    let dir = shared_model();
     let model = IctModel::load_with(&dir, &small()).unwrap();
     assert_eq!(model.vertex_count(), 26_719);
     // 26,384 polygons, mostly quads: each quad gives two triangles.
@@ -108,8 +106,9 @@ fn listed_expressions(dir: &Path) -> Vec<String> {
 }
 
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs ../shared beside the checkout")]
 fn default_import_takes_every_present_file_in_listed_order() {
-    let Some(dir) = shared_model() else { return };
+    let dir = shared_model();
     let model = IctModel::load(&dir).unwrap();
 
     // What the folder holds: identityNNN.obj files, and expression files listed in
@@ -220,8 +219,9 @@ fn imports_a_full_size_checkout_of_tiny_meshes() {
 /// A checkout of the repository has the model in `FaceXModel/`: the importer accepts the
 /// checkout's root as well. Built from links to the shared files.
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs ../shared beside the checkout")]
 fn imports_a_repository_checkout_layout() {
-    let Some(dir) = shared_model() else { return };
+    let dir = shared_model();
     let root = tempfile::tempdir().unwrap();
     let model_dir = root.path().join("FaceXModel");
     std::fs::create_dir(&model_dir).unwrap();

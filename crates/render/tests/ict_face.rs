@@ -3,8 +3,6 @@
 
 mod common;
 
-use std::path::Path;
-
 use visage_camera::{DepthKind, Intrinsics, RigidTransform};
 use visage_render::{render_depth, NO_TRIANGLE};
 
@@ -12,13 +10,11 @@ use visage_render::{render_depth, NO_TRIANGLE};
 const MAX_DISTANCE_M: f64 = 0.05e-3;
 
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs ../shared beside the checkout")]
 fn ict_neutral_face_depth_back_projects_onto_the_mesh() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/ict-facekit/FaceXModel/generic_neutral_mesh.obj");
-    if !path.exists() {
-        println!("SKIPPED: ../shared not found");
-        return;
-    }
+    let path = visage_testdata::require(
+        visage_testdata::shared_dir().join("data/ict-facekit/FaceXModel/generic_neutral_mesh.obj"),
+    );
     let mut mesh = visage_mesh::io::read_obj(&path).unwrap();
     // Centimetres → metres.
     mesh.vertices

@@ -1,17 +1,9 @@
-//! Decoding tests. They need `ffmpeg`/`ffprobe` and skip visibly without them.
+//! Decoding tests. Those that decode need `ffmpeg`/`ffprobe` and are ignored without them.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use visage_video::{ffmpeg_available, probe, FrameSource, VideoError};
-
-fn have_ffmpeg() -> bool {
-    let ok = ffmpeg_available();
-    if !ok {
-        println!("SKIPPED: ffmpeg/ffprobe not installed (apt-get install ffmpeg)");
-    }
-    ok
-}
+use visage_video::{probe, FrameSource, VideoError};
 
 /// Writes a 2-second 64×48 test pattern at 10 fps (20 frames).
 fn test_video(dir: &Path) -> PathBuf {
@@ -38,10 +30,8 @@ fn test_video(dir: &Path) -> PathBuf {
 }
 
 #[test]
+#[cfg_attr(not(ffmpeg), ignore = "needs FFmpeg")]
 fn decodes_every_frame_of_a_video() {
-    if !have_ffmpeg() {
-        return;
-    }
     let dir = tempfile::tempdir().unwrap();
     let path = test_video(dir.path());
     let info = probe(&path).unwrap();
@@ -59,10 +49,8 @@ fn decodes_every_frame_of_a_video() {
 }
 
 #[test]
+#[cfg_attr(not(ffmpeg), ignore = "needs FFmpeg")]
 fn truncated_video_yields_readable_frames_then_names_the_break() {
-    if !have_ffmpeg() {
-        return;
-    }
     let dir = tempfile::tempdir().unwrap();
     // 50 frames, index up front (faststart), short GOPs: half the file holds whole frames.
     let path = dir.path().join("long.mp4");
@@ -115,16 +103,10 @@ fn truncated_video_yields_readable_frames_then_names_the_break() {
 }
 
 #[test]
+#[cfg_attr(not(all(shared_data, ffmpeg)), ignore = "needs ../shared and FFmpeg")]
 fn clips_of_the_project_decode_fully() {
-    if !have_ffmpeg() {
-        return;
-    }
     let path =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/video/lp_d18.mp4");
-    if !path.is_file() {
-        println!("SKIPPED: {} not found", path.display());
-        return;
-    }
+        visage_testdata::require(visage_testdata::shared_dir().join("data/video/lp_d18.mp4"));
     let info = probe(&path).unwrap();
     let mut n = 0;
     for f in FrameSource::open(&path).unwrap() {

@@ -8,17 +8,24 @@
 //! right-hand side and one solve.
 //!
 //! # Frames in, meshes out
-//! ```no_run
+#![cfg_attr(all(model_files, shared_data, ffmpeg), doc = "```")]
+#![cfg_attr(not(all(model_files, shared_data, ffmpeg)), doc = "```ignore")]
 //! use visage::{Input, Reconstructor};
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
-//! let input = Input::open("face.mp4".as_ref())?;
-//! let mut reconstructor = Reconstructor::builder().build_for(&input)?;
+//! let path = std::path::Path::new("face.mp4");
+//! # let path = &visage_testdata::shared_dir().join("data/video/lp_d18.mp4");
+//! let input = Input::open(path)?;
+//! # let input = input.max_frames(12)?;
+//! let builder = Reconstructor::builder();
+//! # let builder = builder.models_dir(visage_testdata::models_dir());
+//! let mut reconstructor = builder.build_for(&input)?;
 //! for frame in input {
 //!     let result = reconstructor.process(&frame?)?;
 //!     if let Some(mesh) = result.mesh() {
 //!         // 1.8k vertices in metres, camera coordinates (x right, y down, z forward).
 //!         println!("frame {}: nose tip at {:?}", result.index(), mesh.vertices[1]);
+//! #       assert!(mesh.vertices[1][2] > 0.2 && mesh.vertices.len() == 1833);
 //!     }
 //! }
 //! # Ok(())

@@ -1,46 +1,35 @@
-//! Helpers shared by the integration tests: locate `../shared` and the model directory, skip
-//! visibly when either is absent.
+//! Helpers shared by the integration tests: locate `../shared` and the model directory. The
+//! tests that need them are ignored when they are absent (see `visage-testdata`); these helpers
+//! panic with a clear message if such a test runs anyway (under `CI=true`).
 #![allow(dead_code)]
 
 use std::path::PathBuf;
 
-/// `shared/reference/facemesh`, or `None` (after printing SKIPPED) when absent.
-pub fn reference_dir() -> Option<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/reference/facemesh");
-    if dir.join("index.json").is_file() {
-        Some(dir)
-    } else {
-        println!("SKIPPED: {} not found", dir.display());
-        None
-    }
+use visage_testdata::require;
+
+/// `shared/reference/facemesh`.
+#[track_caller]
+pub fn reference_dir() -> PathBuf {
+    let dir = require(visage_testdata::shared_dir().join("reference/facemesh"));
+    require(dir.join("index.json"));
+    dir
 }
 
-/// `shared/data`, or `None` (after printing SKIPPED) when absent.
-pub fn data_dir() -> Option<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        println!("SKIPPED: {} not found", dir.display());
-        None
-    }
+/// `shared/data`.
+#[track_caller]
+pub fn data_dir() -> PathBuf {
+    require(visage_testdata::shared_dir().join("data"))
 }
 
-/// The model directory (`$VISAGE_MODELS`, else the workspace's `models/`), or `None` (after
-/// printing SKIPPED) when the pinned files are not there.
-pub fn models_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("VISAGE_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../models"));
-    if visage_face::model_files::models_present(&dir) {
-        Some(dir)
-    } else {
-        println!(
-            "SKIPPED: models not in {} (run `visage models fetch`)",
-            dir.display()
-        );
-        None
+/// The model directory (`$VISAGE_MODELS`, else the workspace's `models/`), holding the pinned
+/// files.
+#[track_caller]
+pub fn models_dir() -> PathBuf {
+    let dir = visage_testdata::models_dir();
+    for file in visage_testdata::MODEL_FILES {
+        require(dir.join(file));
     }
+    dir
 }
 
 /// The reference cases listed in `index.json`.

@@ -526,14 +526,12 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(not(shared_data), ignore = "needs ../shared beside the checkout")]
     fn ict_neutral_face_keeps_its_vertex_order() {
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../../shared/data/ict-facekit/FaceXModel");
-        let path = dir.join("generic_neutral_mesh.obj");
-        if !path.exists() {
-            println!("SKIPPED: ../shared not found");
-            return;
-        }
+        let path = visage_testdata::require(
+            visage_testdata::shared_dir()
+                .join("data/ict-facekit/FaceXModel/generic_neutral_mesh.obj"),
+        );
         let m = read_obj(&path).unwrap();
         assert_eq!(m.triangles.len(), 548 + 2 * 25_836);
         assert!(m.vertices.len() >= 26_719);

@@ -1,0 +1,100 @@
+//! Test support: where the shared data (`../shared` beside the checkout: clips, reference
+//! outputs, ICT-FaceKit) and the MediaPipe model files are, and the switches that make a test
+//! needing them *ignored* — visible as such in the test summary — when they are absent.
+//!
+//! A crate whose tests need them has a two-line build script,
+//! `fn main() { visage_testdata::emit_cfgs(); }`, and marks each such test:
+//!
+//! ```text
+//! #[test]
+//! #[cfg_attr(not(shared_data), ignore = "needs ../shared beside the checkout")]
+//! fn parity() { let dir = visage_testdata::shared_dir(); … }
+//! ```
+//!
+//! The switches are `shared_data`, `model_files` and `ffmpeg`. Under `CI=true` all three are
+//! on whatever is present, so a missing input fails its tests instead of skipping them (CI
+//! always has them). The build script re-runs when `CI`, `VISAGE_MODELS` or
+//! `VISAGE_TEST_DATA` change; `scripts/test.sh` sets the last to what is present, so fetching
+//! the models or adding `../shared` turns the tests on.
+
+use std::path::{Path, PathBuf};
+
+/// The model files the tests use (`visage models fetch`).
+pub const MODEL_FILES: [&str; 3] = [
+    "face_detection_short_range.tflite",
+    "face_landmark.tflite",
+    "geometry_pipeline_metadata_landmarks.binarypb",
+];
+
+/// The workspace root (the folder with the top-level `Cargo.toml`).
+pub fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// `../shared` beside the checkout.
+pub fn shared_dir() -> PathBuf {
+    workspace_root().join("../shared")
+}
+
+/// The model folder: `$VISAGE_MODELS`, else `models/` in the workspace.
+pub fn models_dir() -> PathBuf {
+    std::env::var_os("VISAGE_MODELS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| workspace_root().join("models"))
+}
+
+/// Whether `../shared` holds the data and reference outputs.
+pub fn has_shared_data() -> bool {
+    let shared = shared_dir();
+    shared.join("data").is_dir() && shared.join("reference").is_dir()
+}
+
+/// Whether the model folder holds [`MODEL_FILES`].
+pub fn has_model_files() -> bool {
+    let dir = models_dir();
+    MODEL_FILES.iter().all(|f| dir.join(f).is_file())
+}
+
+/// Whether FFmpeg's command-line tools run.
+pub fn has_ffmpeg() -> bool {
+    ["ffmpeg", "ffprobe"].iter().all(|tool| {
+        std::process::Command::new(tool)
+            .arg("-version")
+            .output()
+            .is_ok_and(|o| o.status.success())
+    })
+}
+
+/// For build scripts: declares the switches and turns on those whose input is present (all of
+/// them under `CI=true`).
+pub fn emit_cfgs() {
+    for var in ["CI", "VISAGE_MODELS", "VISAGE_TEST_DATA"] {
+        println!("cargo::rerun-if-env-changed={var}");
+    }
+    println!("cargo::rerun-if-changed=build.rs");
+    let ci = std::env::var("CI").is_ok_and(|v| v == "true" || v == "1");
+    let switches = [
+        ("shared_data", has_shared_data()),
+        ("model_files", has_model_files()),
+        ("ffmpeg", has_ffmpeg()),
+    ];
+    for (name, present) in switches {
+        println!("cargo::rustc-check-cfg=cfg({name})");
+        if present || ci {
+            println!("cargo::rustc-cfg={name}");
+        }
+    }
+}
+
+/// `path`, or a panic that says what is missing and how to get it — the first line of a test
+/// that runs because CI forced it on.
+#[track_caller]
+pub fn require(path: PathBuf) -> PathBuf {
+    assert!(
+        path.exists(),
+        "{} is missing: the shared data belongs at ../shared beside the checkout; the models \
+         come from `scripts/setup.sh` (or `visage models fetch`)",
+        path.display()
+    );
+    path
+}
