@@ -16,8 +16,12 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 /// Temporally stable, metric 3-D face meshes from RGB video, in real time on a CPU.
+///
+/// `visage run VIDEO --out OUT` writes a fused face mesh per frame; `visage COMMAND --help`
+/// explains each command. Exit codes: 0 success, 1 internal error, 2 bad input or
+/// environment (the message names the file and the problem).
 #[derive(Parser)]
-#[command(name = "visage", version, about)]
+#[command(name = "visage", version, max_term_width = 80)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -25,27 +29,41 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Video, image folder or image in, a fused metric face mesh per frame out
+    /// Video or images in, a fused metric face mesh per frame out
     ///
     /// Writes OUT/meshes/NNNNNN.ply, landmarks.json, metrics.json and camera.json. Exit
     /// codes: 0 done; 2 bad input (missing or corrupt input — a broken video keeps the frames
     /// before the break —, intrinsics for another size, unwritable output, missing models);
     /// 1 internal error.
     Run(commands::run::RunArgs),
-    /// The `run` pipeline without writing meshes, timed per stage: JSON on standard output.
+    /// The `run` pipeline without writing meshes, timed per stage
+    ///
+    /// Decoding, tracking, the metric fit, depth and fusion all run and the quality figures
+    /// are measured; prints JSON (frames per second, per-stage median and 95th percentile,
+    /// CPU use, peak memory, jitter and reprojection error).
     Bench(commands::bench::BenchArgs),
-    /// Reconstruct a mesh sequence from a folder of 16-bit PNG depth maps (paper §2, §4).
+    /// Fuse a folder of 16-bit PNG depth maps into a mesh sequence
+    ///
+    /// The image-plane mesh over the pixels with depth in at least half of the frames,
+    /// fused frame by frame (streaming) or over the whole clip.
     Fuse(commands::fuse::FuseArgs),
-    /// Time the factor-once solver at several mesh sizes and print JSON.
+    /// Time the factor-once solver at several mesh sizes (JSON)
     BenchSolver(commands::bench_solver::BenchSolverArgs),
-    /// Render a mesh to a colour PNG and/or a 16-bit depth PNG (paper §6).
+    /// Render a mesh to a colour PNG and/or a 16-bit depth PNG
     Render(commands::render::RenderArgs),
-    /// 468 FaceMesh landmarks, metric head pose and face depth maps from images or video (paper §3).
+    /// Landmarks, metric head pose and face depth maps
+    ///
+    /// 468 FaceMesh landmarks per face and frame of images or videos, the metric head pose,
+    /// and optionally the fitted face's depth maps (which `visage fuse --depth` reads).
     Landmarks(commands::landmarks::LandmarksArgs),
-    /// Fetch or check the pinned MediaPipe model files (Apache-2.0, from npm).
+    /// Fetch or check the pinned MediaPipe model files
+    ///
+    /// Apache-2.0 model files from the npm package @mediapipe/face_mesh, sha256-checked.
     Models(commands::models::ModelsArgs),
-    /// Benchmarks against ground truth: `visage eval synthetic` (ICT-FaceKit sequences, CNN-like
-    /// depth noise, fusion vs. baselines).
+    /// Benchmarks against ground truth
+    ///
+    /// `visage eval synthetic`: ICT-FaceKit sequences with known geometry, CNN-like depth
+    /// noise, the fusion methods against baselines.
     Eval(commands::eval::EvalArgs),
 }
 

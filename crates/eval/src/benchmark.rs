@@ -1,4 +1,4 @@
-//! The benchmark driver: sequences → noisy inputs → methods → metrics (issue #5).
+//! The benchmark driver: sequences → noisy inputs → methods → metrics.
 
 use std::collections::BTreeMap;
 

@@ -1,6 +1,6 @@
-//! Where MediaPipe's canonical FaceMesh lies on the ICT-FaceKit face (issue #5 item 4, issue #6):
-//! the correspondence that gives the true 3-D position of every FaceMesh landmark — and so of
-//! every face-anchored vertex — in any frame of a synthetic sequence.
+//! Where MediaPipe's canonical FaceMesh lies on the ICT-FaceKit face: the correspondence that
+//! gives the true 3-D position of every FaceMesh landmark — and so of every face-anchored
+//! vertex — in any frame of a synthetic sequence.
 //!
 //! 1. **Alignment.** The canonical mesh (visage axes: x right, y down, z forward, metres) is
 //!    mapped into the ICT model frame (x to the image right, y up, face along +z) by the

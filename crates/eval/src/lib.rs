@@ -1,4 +1,4 @@
-//! visage-eval: the ground-truth benchmark (issue #5). The paper reports no error against
+//! visage-eval: the ground-truth benchmark. The paper reports no error against
 //! ground truth; this crate measures it, on synthetic sequences where the truth is known.
 //!
 //! Pipeline: [`synthesize`] an ICT-FaceKit face sequence (seeded identity, expression

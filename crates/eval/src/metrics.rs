@@ -1,4 +1,4 @@
-//! The benchmark's metrics (issue #5, item 5; ERRATA 13), accumulated over sequences.
+//! The benchmark's metrics (ERRATA 13), accumulated over sequences.
 //!
 //! A method's outputs s_k (#V × 3, camera coordinates, metres) live on its own vertex set, and
 //! each vertex stands for a point whose ground truth (GT) is known ([`VertexTruth`]):
@@ -6,7 +6,7 @@
 //!   (Eq. 2.1); its GT point is g_k(i) ρ_i, g_k(i) the GT distance along ρ_i (bilinear in the
 //!   rendered depth; undefined off the head), and it is in the **face set** F_k when its
 //!   nearest pixel sees a [`visage_morphable::Region::Face`] triangle in the GT render;
-//! - **face-anchored vertices** (issue #6): vertex i is a fixed point of the face; its GT point
+//! - **face-anchored vertices**: vertex i is a fixed point of the face; its GT point
 //!   g_k(i) is that material point on frame k's GT mesh (through the
 //!   [`crate::canonical_correspondence`]), and every vertex is in F_k.
 //!

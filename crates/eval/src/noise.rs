@@ -1,4 +1,4 @@
-//! Depth-noise models that mimic a monocular CNN's errors (issue #5, item 3).
+//! Depth-noise models that mimic a monocular CNN's errors.
 //!
 //! Applied to a ground-truth z-depth map, in this order (every parameter is documented on
 //! [`NoiseModel`]; 0 disables a component):

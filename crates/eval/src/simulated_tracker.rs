@@ -1,4 +1,4 @@
-//! A simulated face tracker (issue #6 on the benchmark): what the face-anchored fusion gets
+//! A simulated face tracker for the benchmark: what the face-anchored fusion gets
 //! from FaceMesh on real video, derived from the ground truth with a documented noise model.
 //!
 //! Per frame k and landmark i (the 468 canonical vertices, placed on the ICT face by the

@@ -1,4 +1,4 @@
-//! Seeded synthesis of ground-truth face sequences from the ICT-FaceKit model (issue #5, item 2).
+//! Seeded synthesis of ground-truth face sequences from the ICT-FaceKit model.
 //!
 //! Per sequence: identity weights ~ N(0, 1); per blendshape a smooth trajectory in [0, 1]
 //! (keyframes, most of them 0: a face is neutral most of the time); head yaw in

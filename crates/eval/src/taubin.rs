@@ -4,9 +4,9 @@
 use faer::Mat;
 use visage_mesh::OneRing;
 
-/// Taubin's shrink step λ (issue #5).
+/// Taubin's shrink step λ.
 pub const TAUBIN_LAMBDA: f64 = 0.5;
-/// Taubin's inflate step μ (issue #5); |μ| > λ > 0 keeps the mesh from shrinking.
+/// Taubin's inflate step μ; |μ| > λ > 0 keeps the mesh from shrinking.
 pub const TAUBIN_MU: f64 = -0.53;
 
 /// Applies `iterations` Taubin passes to the vertex field `x` (#V × 3, metres) in place: each

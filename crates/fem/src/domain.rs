@@ -1,9 +1,10 @@
 //! Coordinates of the image-plane domain Ω that make λ independent of resolution and units.
 //!
-//! The energy (2.3) has three terms. The data and temporal terms are ∫|S − ·|² dx and the
-//! smoothness term is λ∫|ΔS|² dx, so λ carries the units (domain length)⁴: with Ω measured in
-//! pixels, the same λ would smooth twice as much (in angle) on an image of half the resolution.
-//! We measure Ω in **reference pixels**: `ξ = F_REF · ((u − c_x)/f_x, (v − c_y)/f_y)`, the
+//! The combined energy (the paper's unnumbered functional after Eq. 2.5) has three terms. The
+//! data and temporal terms are ∫|S − ·|² dx and the smoothness term is λ∫|ΔS|² dx, so λ
+//! carries the units (domain length)⁴: with Ω measured in pixels, the same λ would smooth
+//! twice as much (in angle) on an image of half the resolution. We measure Ω in **reference
+//! pixels**: `ξ = F_REF · ((u − c_x)/f_x, (v − c_y)/f_y)`, the
 //! normalised image coordinates scaled by [`REFERENCE_FOCAL_PX`]. A given λ then smooths over
 //! the same visual angle at every resolution, and on a VGA camera with `f = 525 px` (Kinect,
 //! TUM RGB-D) ξ is the pixel, so the paper's λ = 2.5 "in pixels" (ERRATA 6) keeps its meaning.

@@ -1,4 +1,4 @@
-//! The discrete energy (2.3), up to a constant that does not depend on the surface.
+//! The discrete combined energy (the paper's unnumbered functional after Eq. 2.5), up to a constant that does not depend on the surface.
 //!
 //! With `s^k` the vertex positions (#V × 3) and `b^k` the data right-hand sides,
 //! `E = Σ_k [ s^kᵀ M_D s^k − 2 b^kᵀ s^k + λ s^kᵀ K s^k ] + μ Σ_{k≥1} (s^k − s^{k−1})ᵀ M (s^k − s^{k−1})`

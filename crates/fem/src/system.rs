@@ -7,7 +7,8 @@ use faer::{MatMut, MatRef};
 use crate::sparse::{linear_combination, sym_matmul, SparseMatrix};
 use crate::{Factorization, FemError};
 
-/// Regularisation weights of the energy (2.3): `E = E_data + λ E_smooth + μ E_temp`.
+/// Regularisation weights of the combined energy (unnumbered, after Eq. 2.5):
+/// `E = E_data + λ E_smooth + μ E_temp`.
 ///
 /// Defaults: λ = 10, μ = 0.5, the best RMSE of the ground-truth benchmark's λ × μ sweep
 /// (`visage eval synthetic --sweep-lambda … --sweep-mu …`, 3 sequences × 120 frames, cnn-like

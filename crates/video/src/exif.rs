@@ -1,5 +1,5 @@
 //! The camera's focal length from an image's EXIF metadata, for intrinsics when the user gives
-//! none (issue #6: `--intrinsics`, else `--fov-deg`, else EXIF).
+//! none (`--intrinsics`, else `--fov-deg`, else EXIF).
 //!
 //! Only the 35 mm-equivalent focal length (tag `FocalLengthIn35mmFilm`, 0xA405, in the Exif
 //! sub-IFD) is used: the plain `FocalLength` (0x920A) needs the sensor size, which EXIF rarely
