@@ -33,7 +33,7 @@ pub use fused_frame::{FrameStatus, FusedFrame};
 pub use fusion_setup::{FusionSetup, MeshingOptions, INPAINT_SWEEPS};
 pub use image_plane_fuser::{to_positions, ImagePlaneFuser, DEFAULT_MAX_DEPTH_M};
 pub use solver_bench::{bench_solver, SizeReport, SolverBench, VariantReport};
-pub use surface_fuser::{ClipState, SurfaceFuser};
+pub use surface_fuser::{solve_clip_frames, ClipFrame, ClipState, SurfaceFuser};
 pub use surface_fusion::{
-    ClipFrame, FaceFrame, FaceTemplate, FusedSurfaces, FusionParams, MeshKind, SurfaceFusion,
+    FaceFrame, FaceTemplate, FusedSurfaces, FusionParams, MeshKind, SurfaceFusion,
 };

@@ -3,7 +3,7 @@
 
 use faer::Mat;
 use visage_camera::RigidTransform;
-use visage_fem::{FusionSystem, SurfaceQuality};
+use visage_fem::{solve_clip, ClipOptions, ClipReport, FusionSystem, SurfaceQuality};
 
 /// A frame's state kept for the whole-clip solve (ERRATA 1 and 17): its data right-hand side
 /// and streaming solution in the solver's coordinates (#V × 3 each), and the pose that maps
@@ -47,4 +47,32 @@ pub trait SurfaceFuser {
     /// Makes a clip-solved frame the current one: its solution `x` and `pose` (as in its
     /// [`ClipState`]) and its raw surface.
     fn load_clip_solution(&mut self, x: &Mat<f64>, pose: RigidTransform, raw: &[[f64; 3]]);
+}
+
+/// A frame kept for the whole-clip solve: its [`ClipState`], its raw surface and (video) its
+/// landmark pixels.
+pub struct ClipFrame {
+    pub state: ClipState,
+    pub raw: Vec<[f64; 3]>,
+    pub landmarks_px: Vec<[f64; 2]>,
+}
+
+/// Solves the clip system (ERRATA 1, 17) over `frames` — consecutive frames of one sequence or
+/// face track — on `fuser`'s streaming factorisation, from their streaming solutions; their
+/// states' `x` hold the clip solutions afterwards. Load one back with
+/// [`SurfaceFuser::load_clip_solution`].
+pub fn solve_clip_frames(
+    fuser: &mut dyn SurfaceFuser,
+    frames: &mut [ClipFrame],
+    options: &ClipOptions,
+) -> ClipReport {
+    let take = |m: &mut Mat<f64>| std::mem::replace(m, Mat::new());
+    let b: Vec<Mat<f64>> = frames.iter_mut().map(|f| take(&mut f.state.b)).collect();
+    let mut x: Vec<Mat<f64>> = frames.iter_mut().map(|f| take(&mut f.state.x)).collect();
+    let report = solve_clip(fuser.system_mut(), &b, &mut x, options);
+    for ((f, x), b) in frames.iter_mut().zip(x).zip(b) {
+        f.state.x = x;
+        f.state.b = b;
+    }
+    report
 }

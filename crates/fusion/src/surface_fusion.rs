@@ -12,13 +12,14 @@
 use faer::Mat;
 use serde::Serialize;
 use visage_camera::{DepthMap, Intrinsics, RigidTransform};
-use visage_fem::{solve_clip, ClipOptions, ClipReport, FusionSystem, SurfaceQuality, Weights};
+use visage_fem::{ClipOptions, ClipReport, FusionSystem, SurfaceQuality, Weights};
 
 use crate::image_domain::{dilated_face_mask, dilation_radius};
 use crate::point_locator::PointLocator;
 use crate::{
-    AnchoredFrame, AnchoredFuser, ClipState, FaceDomain, FrameDepth, FrameStatus, FusedFrame,
-    FusionError, FusionSetup, ImagePlaneFuser, MeshingOptions, SurfaceFuser,
+    solve_clip_frames, AnchoredFrame, AnchoredFuser, ClipFrame, ClipState, FaceDomain, FrameDepth,
+    FrameStatus, FusedFrame, FusionError, FusionSetup, ImagePlaneFuser, MeshingOptions,
+    SurfaceFuser,
 };
 
 /// Which mesh carries the surface.
@@ -75,13 +76,6 @@ pub struct FusedSurfaces {
     pub frame: FusedFrame,
     pub raw_quality: SurfaceQuality,
     pub fused_quality: SurfaceQuality,
-}
-
-/// A frame kept for the clip solve: its [`ClipState`], raw surface and landmark pixels.
-pub struct ClipFrame {
-    pub state: ClipState,
-    pub raw: Vec<[f64; 3]>,
-    pub landmarks_px: Vec<[f64; 2]>,
 }
 
 struct ImagePlane {
@@ -283,21 +277,14 @@ impl SurfaceFusion {
     /// Solves the clip system (ERRATA 1, 17) over `frames` — consecutive frames of one track —
     /// on the streaming factorisation; their states' `x` hold the solutions afterwards.
     pub fn solve_clip(&mut self, frames: &mut [ClipFrame], options: &ClipOptions) -> ClipReport {
-        let take = |m: &mut Mat<f64>| std::mem::replace(m, Mat::new());
-        let b: Vec<Mat<f64>> = frames.iter_mut().map(|f| take(&mut f.state.b)).collect();
-        let mut x: Vec<Mat<f64>> = frames.iter_mut().map(|f| take(&mut f.state.x)).collect();
-        let Some(fuser) = self.fuser_mut() else {
-            return ClipReport {
+        match self.fuser_mut() {
+            Some(fuser) => solve_clip_frames(fuser, frames, options),
+            None => ClipReport {
                 iterations: 0,
                 relative_residual: 0.0,
                 converged: true,
-            };
-        };
-        let report = solve_clip(fuser.system_mut(), &b, &mut x, options);
-        for (f, x) in frames.iter_mut().zip(x) {
-            f.state.x = x;
+            },
         }
-        report
     }
 
     /// Makes a clip-solved frame the current surface (fused = its clip solution in camera

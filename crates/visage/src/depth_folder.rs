@@ -6,10 +6,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 use visage_camera::{DepthKind, Intrinsics};
-use visage_fem::{solve_clip, ClipOptions, FusionSystem, Weights};
+use visage_fem::{ClipOptions, FusionSystem, Weights};
 use visage_fusion::{
-    ClipState, DepthSequence, FrameStatus as FusedStatus, FusionSetup, ImagePlaneFuser,
-    MeshingOptions, SurfaceFuser, DEFAULT_MAX_DEPTH_M,
+    solve_clip_frames, ClipFrame, ClipState, DepthSequence, FrameStatus as FusedStatus,
+    FusionSetup, ImagePlaneFuser, MeshingOptions, SurfaceFuser, DEFAULT_MAX_DEPTH_M,
 };
 use visage_mesh::io::PlyFormat;
 
@@ -179,33 +179,37 @@ impl DepthRun<'_> {
     /// guess), then the whole-clip solve over the frames with data.
     fn clip(&mut self, options: &ClipOptions) -> Result<(), Error> {
         let total = self.sequence.frames.len();
-        let mut members = Vec::new();
+        let (mut positions, mut frames) = (Vec::new(), Vec::new());
         for index in 0..total {
             let (metrics, state) = self.fuse(index, true)?;
             let position = self.recorder.push(metrics);
             if let Some(state) = state {
-                members.push((position, state, self.fuser.raw().to_vec()));
+                positions.push(position);
+                frames.push(ClipFrame {
+                    state,
+                    raw: self.fuser.raw().to_vec(),
+                    landmarks_px: Vec::new(),
+                });
             }
             (self.progress)(index + 1, 2 * total);
         }
         let start = Instant::now();
-        let bs: Vec<_> = members.iter().map(|(_, s, _)| s.b.clone()).collect();
-        let mut xs: Vec<_> = members.iter().map(|(_, s, _)| s.x.clone()).collect();
-        let report = solve_clip(self.fuser.system_mut(), &bs, &mut xs, options);
+        let report = solve_clip_frames(&mut self.fuser, &mut frames, options);
         let clip_ms = start.elapsed().as_secs_f64() * 1e3;
         self.solver.clip = Some(report);
         self.solver.clip_ms = Some(clip_ms);
-        let share = clip_ms / members.len().max(1) as f64;
-        for ((position, state, raw), x) in members.iter().zip(&xs) {
+        let share = clip_ms / frames.len().max(1) as f64;
+        for (&position, frame) in positions.iter().zip(&frames) {
             let start = Instant::now();
-            self.fuser.load_clip_solution(x, state.pose, raw);
+            self.fuser
+                .load_clip_solution(&frame.state.x, frame.state.pose, &frame.raw);
             let (raw_q, fused_q) = self.fuser.frame_quality();
-            let m = &mut self.recorder.frames[*position];
+            let m = &mut self.recorder.frames[position];
             m.quality = FrameQuality::of(&raw_q, &fused_q);
             m.relative_residual = report.relative_residual;
             m.ms.fuse += share;
-            self.write(*position)?;
-            self.recorder.frames[*position].ms.write = start.elapsed().as_secs_f64() * 1e3;
+            self.write(position)?;
+            self.recorder.frames[position].ms.write = start.elapsed().as_secs_f64() * 1e3;
             (self.progress)(total + position + 1, 2 * total);
         }
         Ok(())
