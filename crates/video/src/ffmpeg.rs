@@ -1,5 +1,20 @@
 //! Video decoding through the FFmpeg command-line tools: `ffprobe` for size, frame rate and
 //! rotation; `ffmpeg -f rawvideo -pix_fmt rgb24 -` through a pipe, one frame in memory at a time.
+//!
+//! # Timestamps
+//! Every decoded frame carries its presentation time ([`Frame::timestamp_s`]), in seconds since
+//! the first frame. Before decoding, `ffprobe` lists the video packets' presentation timestamps
+//! (`-show_entries packet=pts,flags`: the container's index, no decoding, about 0.1 s for a
+//! minute of video); discarded packets (flag `D`, e.g. before an MP4 edit list's start) are
+//! dropped and the rest sorted into presentation order. `ffmpeg` runs with `-fps_mode
+//! passthrough` (`-vsync passthrough` before FFmpeg 5.1), so it hands over every decoded frame
+//! exactly once, in presentation order — without it the
+//! raw-video output is constant-rate and a variable-frame-rate video comes out with frames
+//! duplicated or dropped. Frame `i` then has the `i`-th sorted timestamp, so variable frame
+//! rates are exact. When the container has no timestamps (a raw elementary stream, a packet
+//! without `pts`), or decoding yields more frames than packets were listed, the frame rate
+//! stands in: `index / fps`, or one `1 / fps` step per frame after the last listed packet;
+//! without a frame rate the timestamp is `None`.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -17,16 +32,41 @@ pub struct VideoInfo {
     pub width: u32,
     /// Displayed height in pixels.
     pub height: u32,
-    /// Frames per second (`r_frame_rate`), `None` when unknown.
+    /// The stream's frame rate in frames per second (`r_frame_rate`, exact as the ratio FFmpeg
+    /// states, e.g. 30000/1001 for 29.97), `None` when unknown. For a constant-rate video it
+    /// is the rate of its frames; for a variable-rate one, the base rate its timestamps are a
+    /// multiple of — use [`Frame::timestamp_s`] for when a frame is shown.
     pub fps: Option<f64>,
+    /// The average frame rate (`avg_frame_rate`: frames / duration), `None` when unknown.
+    /// Equals `fps` for a constant-rate video.
+    pub avg_fps: Option<f64>,
     /// Rotation metadata in degrees (counter-clockwise, as FFmpeg's display matrix), 0 if none.
     pub rotation: i32,
     /// Frame count from the container, when it states one.
     pub frame_count: Option<usize>,
 }
 
+/// The stream's time base (seconds per timestamp tick), as FFmpeg's ratio.
+#[derive(Clone, Copy, Debug)]
+struct TimeBase {
+    num: i64,
+    den: i64,
+}
+
 /// Probes `path` with `ffprobe`.
 pub fn probe(path: &Path) -> Result<VideoInfo, VideoError> {
+    probe_stream(path).map(|(info, _)| info)
+}
+
+/// A ratio `"a/b"` with both parts positive.
+fn ratio(s: &serde_json::Value) -> Option<(i64, i64)> {
+    let (a, b) = s.as_str()?.split_once('/')?;
+    let (a, b): (i64, i64) = (a.trim().parse().ok()?, b.trim().parse().ok()?);
+    (a > 0 && b > 0).then_some((a, b))
+}
+
+/// [`probe`] and the stream's time base.
+fn probe_stream(path: &Path) -> Result<(VideoInfo, Option<TimeBase>), VideoError> {
     let out = Command::new("ffprobe")
         .args([
             "-v",
@@ -67,11 +107,10 @@ pub fn probe(path: &Path) -> Result<VideoInfo, VideoError> {
     let (Some(w), Some(h)) = (dim("width"), dim("height")) else {
         return Err(not_video("video stream without a size".into()));
     };
-    let fps = s["r_frame_rate"].as_str().and_then(|r| {
-        let (a, b) = r.split_once('/')?;
-        let (a, b): (f64, f64) = (a.parse().ok()?, b.parse().ok()?);
-        (a > 0.0 && b > 0.0).then_some(a / b)
-    });
+    let rate = |k: &str| ratio(&s[k]).map(|(a, b)| a as f64 / b as f64);
+    let fps = rate("r_frame_rate");
+    let avg_fps = rate("avg_frame_rate");
+    let time_base = ratio(&s["time_base"]).map(|(num, den)| TimeBase { num, den });
     let rotation = s["side_data_list"]
         .as_array()
         .and_then(|l| l.iter().find_map(|d| d["rotation"].as_i64()))
@@ -79,13 +118,59 @@ pub fn probe(path: &Path) -> Result<VideoInfo, VideoError> {
         .unwrap_or(0) as i32;
     let frame_count = s["nb_frames"].as_str().and_then(|n| n.parse().ok());
     let quarter = rotation.rem_euclid(180) == 90;
-    Ok(VideoInfo {
+    let info = VideoInfo {
         width: if quarter { h } else { w },
         height: if quarter { w } else { h },
         fps,
+        avg_fps,
         rotation,
         frame_count,
-    })
+    };
+    Ok((info, time_base))
+}
+
+/// The presentation timestamps of the first video stream's packets, in seconds since the
+/// earliest, sorted: the frames' times in the order a passthrough `ffmpeg` delivers them. `None`
+/// when `ffprobe` lists no packets or a kept packet has no timestamp. A file cut short lists
+/// the packets before the cut.
+fn packet_timestamps(path: &Path, time_base: TimeBase) -> Option<Vec<f64>> {
+    let out = Command::new("ffprobe")
+        .args([
+            "-v",
+            "error",
+            "-select_streams",
+            "v:0",
+            "-show_entries",
+            "packet=pts,flags",
+            "-of",
+            "csv=p=0",
+        ])
+        .arg(path)
+        .stdin(Stdio::null())
+        .stderr(Stdio::null())
+        .output()
+        .ok()?;
+    let mut pts = parse_packet_list(&String::from_utf8_lossy(&out.stdout))?;
+    pts.sort_unstable();
+    let first = *pts.first()?;
+    let tick = time_base.num as f64 / time_base.den as f64;
+    Some(pts.iter().map(|&p| (p - first) as f64 * tick).collect())
+}
+
+/// The `pts` of each line `pts,flags` that is not flagged discarded (`D`); `None` when a kept
+/// line has no integer `pts` (`N/A`).
+fn parse_packet_list(text: &str) -> Option<Vec<i64>> {
+    let mut pts = Vec::new();
+    for line in text.lines().map(str::trim).filter(|l| !l.is_empty()) {
+        let mut fields = line.split(',');
+        let value = fields.next()?.trim();
+        let flags = fields.next().unwrap_or("");
+        if flags.contains('D') {
+            continue;
+        }
+        pts.push(value.parse().ok()?);
+    }
+    Some(pts)
 }
 
 /// Streams the frames of a video. Yields `Ok(frame)` for every decodable frame; if the
@@ -94,6 +179,7 @@ pub fn probe(path: &Path) -> Result<VideoInfo, VideoError> {
 pub struct VideoReader {
     path: PathBuf,
     info: VideoInfo,
+    timestamps: Option<Vec<f64>>,
     child: Option<Child>,
     stdout: Option<ChildStdout>,
     stderr: Option<JoinHandle<String>>,
@@ -102,13 +188,16 @@ pub struct VideoReader {
 }
 
 impl VideoReader {
-    /// Probes and starts decoding `path`.
+    /// Probes `path`, lists its frames' timestamps and starts decoding it.
     pub fn open(path: &Path) -> Result<VideoReader, VideoError> {
-        let info = probe(path)?;
+        let (info, time_base) = probe_stream(path)?;
+        let timestamps = time_base.and_then(|tb| packet_timestamps(path, tb));
+        // Every decoded frame once, with its own time (see the module's docs).
         let mut child = Command::new("ffmpeg")
             .args(["-v", "error", "-nostdin", "-i"])
             .arg(path)
-            .args(["-map", "0:v:0", "-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
+            .args(["-map", "0:v:0", passthrough_option(), "passthrough"])
+            .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -129,6 +218,7 @@ impl VideoReader {
         Ok(VideoReader {
             path: path.to_owned(),
             info,
+            timestamps,
             child: Some(child),
             stdout,
             stderr,
@@ -140,6 +230,19 @@ impl VideoReader {
     /// Size, frame rate and rotation of the stream.
     pub fn info(&self) -> VideoInfo {
         self.info
+    }
+
+    /// Frame `index`'s presentation time (see the module's docs).
+    fn timestamp(&self, index: usize) -> Option<f64> {
+        let fps = self.info.fps;
+        match self.timestamps.as_deref() {
+            Some(ts) if index < ts.len() => Some(ts[index]),
+            Some(ts) if !ts.is_empty() => {
+                let last = ts.len() - 1;
+                fps.map(|f| ts[last] + (index - last) as f64 / f)
+            }
+            _ => fps.map(|f| index as f64 / f),
+        }
     }
 
     /// Waits for ffmpeg and turns a failure into `Broken`; `None` when it ended cleanly.
@@ -207,6 +310,7 @@ impl Iterator for VideoReader {
         let frame = Frame {
             index: self.next,
             source: format!("{}:{}", self.path.display(), self.next),
+            timestamp_s: self.timestamp(self.next),
             image,
         };
         self.next += 1;
@@ -224,6 +328,40 @@ impl Drop for VideoReader {
     }
 }
 
+/// The option that makes `ffmpeg` pass every frame through once: `-fps_mode` (FFmpeg 5.1 and
+/// later; FFmpeg 9 dropped the older name), or `-vsync` before 5.1, which has no `-fps_mode`.
+/// Asks `ffmpeg -version` once per process.
+fn passthrough_option() -> &'static str {
+    static OPTION: std::sync::OnceLock<&'static str> = std::sync::OnceLock::new();
+    OPTION.get_or_init(|| {
+        let version = Command::new("ffmpeg")
+            .arg("-version")
+            .stdin(Stdio::null())
+            .stderr(Stdio::null())
+            .output()
+            .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
+            .unwrap_or_default();
+        match release(&version) {
+            Some(v) if v < (5, 1) => "-vsync",
+            _ => "-fps_mode",
+        }
+    })
+}
+
+/// `(major, minor)` from `ffmpeg -version`'s first line (`ffmpeg version 5.1.9-0+deb12u1 …`,
+/// `ffmpeg version n6.1 …`); `None` for a build from git (`N-113000-g…`) or anything else.
+fn release(version_text: &str) -> Option<(u32, u32)> {
+    let word = version_text
+        .split_whitespace()
+        .skip_while(|w| *w != "version")
+        .nth(1)?;
+    let word = word.strip_prefix('n').unwrap_or(word);
+    let mut parts = word.split(|c: char| !c.is_ascii_digit());
+    let major = parts.next()?.parse().ok()?;
+    let minor = parts.next().and_then(|m| m.parse().ok()).unwrap_or(0);
+    Some((major, minor))
+}
+
 /// Whether `ffmpeg` and `ffprobe` can be run (for tests and diagnostics).
 pub fn ffmpeg_available() -> bool {
     ["ffmpeg", "ffprobe"].iter().all(|t| {
@@ -234,4 +372,30 @@ pub fn ffmpeg_available() -> bool {
             .status()
             .is_ok_and(|s| s.success())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{parse_packet_list, release};
+
+    #[test]
+    fn ffmpeg_releases_are_read_from_the_version_line() {
+        let line =
+            |v: &str| format!("ffmpeg version {v} Copyright (c) 2000-2026 the FFmpeg developers");
+        assert_eq!(release(&line("5.1.9-0+deb12u1")), Some((5, 1)));
+        assert_eq!(release(&line("4.4.2-0ubuntu0.22.04.1")), Some((4, 4)));
+        assert_eq!(release(&line("n6.1")), Some((6, 1)));
+        assert_eq!(release(&line("9.0-full_build-www.gyan.dev")), Some((9, 0)));
+        assert_eq!(release(&line("7")), Some((7, 0)));
+        assert_eq!(release(&line("N-113000-g1234abcd")), None);
+        assert_eq!(release(""), None);
+    }
+
+    #[test]
+    fn packet_list_skips_discarded_packets_and_refuses_missing_timestamps() {
+        let text = "-1024,_D\n0,K_\n2048,__\n1024,__\n\n";
+        assert_eq!(parse_packet_list(text), Some(vec![0, 2048, 1024]));
+        assert_eq!(parse_packet_list("0,K_\nN/A,__\n"), None);
+        assert_eq!(parse_packet_list(""), Some(vec![]));
+    }
 }

@@ -6,6 +6,10 @@
 //! API across versions), and a crash in a decoder cannot take the process down. The cost is one
 //! copy per frame through the pipe. Needs the Debian package `ffmpeg` at run time.
 //!
+//! Frames carry presentation timestamps ([`Frame::timestamp_s`], seconds since the first
+//! frame): a video's own, variable frame rates included (see [`ffmpeg`]); an image folder's
+//! only when the caller states its frame rate ([`FrameSource::with_frame_rate`]).
+//!
 //! A truncated or corrupt video yields every decodable frame, then one
 //! [`VideoError::Broken`] naming the frame index where decoding stopped.
 

@@ -26,6 +26,7 @@ pub fn read_image(path: &Path) -> Result<Frame, VideoError> {
     Ok(Frame {
         index: 0,
         source: path.display().to_string(),
+        timestamp_s: None,
         image: img.to_rgb8(),
     })
 }
@@ -34,8 +35,13 @@ pub fn read_image(path: &Path) -> Result<Frame, VideoError> {
 pub enum FrameSource {
     /// A video decoded by FFmpeg.
     Video(VideoReader),
-    /// Image files, read one at a time.
-    Images { paths: Vec<PathBuf>, next: usize },
+    /// Image files, read one at a time; `fps` is the frame rate the caller gave
+    /// ([`FrameSource::with_frame_rate`]), which the files themselves do not state.
+    Images {
+        paths: Vec<PathBuf>,
+        next: usize,
+        fps: Option<f64>,
+    },
 }
 
 impl FrameSource {
@@ -61,15 +67,41 @@ impl FrameSource {
                 });
             }
             paths.sort();
-            return Ok(FrameSource::Images { paths, next: 0 });
+            return Ok(FrameSource::Images {
+                paths,
+                next: 0,
+                fps: None,
+            });
         }
         if is_image_path(path) {
             return Ok(FrameSource::Images {
                 paths: vec![path.to_owned()],
                 next: 0,
+                fps: None,
             });
         }
         Ok(FrameSource::Video(VideoReader::open(path)?))
+    }
+
+    /// Gives images the frame rate they were taken at: image `i` is then at `i / fps`
+    /// seconds ([`Frame::timestamp_s`]). Without it images have no timestamps. A video keeps
+    /// its own timestamps and ignores this; an `fps` that is not positive and finite is ignored.
+    pub fn with_frame_rate(mut self, fps: f64) -> FrameSource {
+        if let FrameSource::Images { fps: rate, .. } = &mut self {
+            if fps.is_finite() && fps > 0.0 {
+                *rate = Some(fps);
+            }
+        }
+        self
+    }
+
+    /// The frame rate: a video's stream rate ([`VideoInfo::fps`](crate::VideoInfo::fps)), the
+    /// rate given to images, `None` when unknown.
+    pub fn frame_rate(&self) -> Option<f64> {
+        match self {
+            FrameSource::Video(v) => v.info().fps,
+            FrameSource::Images { fps, .. } => *fps,
+        }
     }
 }
 
@@ -79,11 +111,16 @@ impl Iterator for FrameSource {
     fn next(&mut self) -> Option<Self::Item> {
         match self {
             FrameSource::Video(v) => v.next(),
-            FrameSource::Images { paths, next } => {
+            FrameSource::Images { paths, next, fps } => {
                 let path = paths.get(*next)?;
                 let index = *next;
                 *next += 1;
-                Some(read_image(path).map(|f| Frame { index, ..f }))
+                let timestamp_s = fps.map(|f| index as f64 / f);
+                Some(read_image(path).map(|f| Frame {
+                    index,
+                    timestamp_s,
+                    ..f
+                }))
             }
         }
     }

@@ -43,6 +43,10 @@ fn decodes_every_frame_of_a_video() {
         .unwrap();
     assert_eq!(frames.len(), 20);
     assert_eq!(frames[19].index, 19);
+    for (i, f) in frames.iter().enumerate() {
+        let t = f.timestamp_s.unwrap();
+        assert!((t - i as f64 / 10.0).abs() < 1e-9, "frame {i} at {t} s");
+    }
     assert_eq!(frames[0].image.dimensions(), (64, 48));
     // testsrc changes over time: consecutive frames differ.
     assert_ne!(frames[0].image, frames[10].image);
@@ -120,6 +124,109 @@ fn clips_of_the_project_decode_fully() {
     assert!(n > 100);
 }
 
+/// A clip's frames: timestamps from 0, strictly increasing, spaced 1/fps (constant-rate
+/// clips); a plausible frame rate; as many frames as the container states.
+fn check_clip_timestamps(name: &str) {
+    let path =
+        visage_testdata::require(visage_testdata::shared_dir().join("data/video").join(name));
+    let info = probe(&path).unwrap();
+    let fps = info.fps.expect("a frame rate");
+    assert!((10.0..=240.0).contains(&fps), "{name}: {fps} fps");
+    let avg = info.avg_fps.expect("an average frame rate");
+    assert!((avg - fps).abs() < 0.01 * fps, "{name}: {avg} vs {fps} fps");
+    let source = FrameSource::open(&path).unwrap();
+    assert_eq!(source.frame_rate(), Some(fps));
+    let times: Vec<f64> = source
+        .map(|f| f.unwrap().timestamp_s.expect("a timestamp"))
+        .collect();
+    if let Some(count) = info.frame_count {
+        assert_eq!(times.len(), count, "{name}");
+    }
+    assert_eq!(times[0], 0.0, "{name}");
+    for (i, w) in times.windows(2).enumerate() {
+        let step = w[1] - w[0];
+        assert!(step > 0.0, "{name}: frame {} not after frame {i}", i + 1);
+        assert!(
+            (step * fps - 1.0).abs() < 0.01,
+            "{name}: frames {i}..{} {step} s apart at {fps} fps",
+            i + 1
+        );
+    }
+}
+
+#[test]
+#[cfg_attr(not(all(shared_data, ffmpeg)), ignore = "needs ../shared and FFmpeg")]
+fn clips_have_increasing_timestamps_at_their_frame_rate() {
+    check_clip_timestamps("lp_d18.mp4");
+    check_clip_timestamps("lp_d13.mp4");
+}
+
+#[test]
+#[cfg_attr(not(ffmpeg), ignore = "needs FFmpeg")]
+fn variable_frame_rate_keeps_every_frame_at_its_own_time() {
+    let dir = tempfile::tempdir().unwrap();
+    // 20 frames of a 10 fps pattern, the later ones spread out (setpts). Matroska keeps
+    // variable timestamps by default (MP4 would be made constant-rate without an option).
+    let path = dir.path().join("vfr.mkv");
+    let status = Command::new("ffmpeg")
+        .args([
+            "-v",
+            "error",
+            "-y",
+            "-f",
+            "lavfi",
+            "-i",
+            "testsrc=size=64x48:rate=10:duration=2",
+            "-vf",
+            "setpts='if(lt(N,10),N/10,1+(N-10)/5)/TB'",
+            "-pix_fmt",
+            "yuv420p",
+            "-c:v",
+            "libx264",
+        ])
+        .arg(&path)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    // When ffprobe, decoding every frame, says each frame is shown.
+    let out = Command::new("ffprobe")
+        .args(["-v", "error", "-select_streams", "v:0", "-show_entries"])
+        .args(["frame=best_effort_timestamp_time", "-of", "csv=p=0"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    let expected: Vec<f64> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| l.split(',').next()?.trim().parse().ok())
+        .collect();
+    assert_eq!(expected.len(), 20);
+    let steps: Vec<f64> = expected.windows(2).map(|w| w[1] - w[0]).collect();
+    let (min, max) = steps
+        .iter()
+        .fold((f64::MAX, 0.0f64), |(a, b), &s| (a.min(s), b.max(s)));
+    assert!(
+        max > 1.5 * min,
+        "not a variable frame rate: steps {steps:?}"
+    );
+    let frames: Vec<_> = FrameSource::open(&path)
+        .unwrap()
+        .collect::<Result<_, _>>()
+        .unwrap();
+    // A constant-rate pipe would repeat frames to fill the longer gaps.
+    assert_eq!(frames.len(), 20);
+    for (f, want) in frames.iter().zip(&expected) {
+        let t = f.timestamp_s.unwrap();
+        assert!(
+            (t - want).abs() < 1e-6,
+            "frame {} at {t} s, not {want}",
+            f.index
+        );
+    }
+    // Consecutive frames are distinct pictures, none repeated.
+    assert!(frames.windows(2).all(|w| w[0].image != w[1].image));
+    assert_eq!(probe(&path).unwrap().fps, Some(10.0));
+}
+
 #[test]
 fn folders_and_single_images() {
     let dir = tempfile::tempdir().unwrap();
@@ -140,6 +247,14 @@ fn folders_and_single_images() {
     assert_eq!(frames.len(), 2);
     assert!(frames[0].source.ends_with("a.png") && frames[0].image.get_pixel(0, 0)[0] == 1);
     assert_eq!(frames[1].index, 1);
+    // Images state no time; with a frame rate given, image i is at i / fps.
+    assert!(frames.iter().all(|f| f.timestamp_s.is_none()));
+    let source = FrameSource::open(dir.path()).unwrap();
+    assert_eq!(source.frame_rate(), None);
+    let source = source.with_frame_rate(25.0);
+    assert_eq!(source.frame_rate(), Some(25.0));
+    let times: Vec<_> = source.map(|f| f.unwrap().timestamp_s).collect();
+    assert_eq!(times, [Some(0.0), Some(0.04)]);
     let one: Vec<_> = FrameSource::open(&dir.path().join("b.png"))
         .unwrap()
         .collect();
