@@ -2,11 +2,13 @@
 # Sets up visage on a fresh Debian machine and runs the main job on a sample.
 #
 #   scripts/setup.sh          install system packages, build (release), fetch the pinned
-#                             MediaPipe models from npm, run the sample job into out/sample/
+#                             MediaPipe models (npm, and the iris network from PyPI), run the
+#                             sample job into out/sample/
 #   scripts/setup.sh --ci     packages and models only (what the test suite needs)
 #
-# Needs: a Rust toolchain (cargo), Node.js/npm (for `npm pack`), apt-get as root (or the
-# packages below already installed).
+# Needs: a Rust toolchain (cargo), Node.js/npm (for `npm pack`), Python 3 with pip (for
+# `pip download` of the mediapipe wheel), apt-get as root (or the packages below already
+# installed).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -17,6 +19,7 @@ mode=full
 need=()
 command -v ffmpeg >/dev/null 2>&1 || need+=(ffmpeg)
 command -v npm >/dev/null 2>&1 || need+=(npm)
+python3 -m pip --version >/dev/null 2>&1 || need+=(python3-pip)
 if [ ${#need[@]} -gt 0 ]; then
   if [ "$(id -u)" = 0 ]; then
     echo "setup: installing ${need[*]} (apt)"
@@ -37,7 +40,8 @@ else
   bin="$target_dir/release/visage"
 fi
 
-# Model files: npm package @mediapipe/face_mesh, pinned and sha256-checked, into models/.
+# Model files: npm package @mediapipe/face_mesh and the iris network from the PyPI wheel
+# mediapipe==0.10.21, pinned and sha256-checked, into models/.
 "$bin" models fetch
 
 [ "$mode" = ci ] && exit 0

@@ -1,4 +1,4 @@
-use crate::{Detection, FrameLandmarks};
+use crate::{Detection, Eyes, FrameLandmarks};
 
 /// One face found in a frame: detector output (if the detector ran for it) and landmarks.
 #[derive(Clone, Debug, PartialEq)]
@@ -12,6 +12,9 @@ pub struct Face {
     pub detection: Option<Detection>,
     /// Landmarks in frame pixels.
     pub landmarks: FrameLandmarks,
+    /// Eye contours and irises in frame pixels (`right` = the subject's right eye, on the
+    /// image's left), when the iris network is loaded ([`crate::FaceMesh::iris`]).
+    pub eyes: Option<Eyes>,
 }
 
 /// Axis-aligned bounding box `[x, y, w, h]` of the points' `(x, y)`.

