@@ -11,7 +11,6 @@ use visage_fusion::{
 use visage_mesh::Mask;
 use visage_morphable::{IctModel, ImportOptions};
 
-use crate::canonical_correspondence::CanonicalCorrespondence;
 use crate::method::{AnchoredInput, Method, MethodInput, MethodRun, VertexKind};
 use crate::metrics::{
     evaluate_sequence, MethodSummary, MetricAccumulator, PerFrame, Scored, VertexSet, VertexTruth,
@@ -20,6 +19,7 @@ use crate::noise::{NoiseGenerator, NoiseModel};
 use crate::simulated_tracker::{simulate_tracking, TrackedSequence, TrackerNoise};
 use crate::synthesis::{synthesize, SynthesisConfig, SyntheticSequence};
 use crate::EvalError;
+use visage_morphable::CanonicalCorrespondence;
 
 /// Salt of the seed of the Taubin tuning sequence: tuned on data the benchmark never scores.
 pub const TUNING_SALT: u64 = 0x7a_0b1e_5eed;
@@ -188,7 +188,7 @@ impl FaceAnchoring {
         canonical: CanonicalMesh,
         subdivision: usize,
     ) -> Result<FaceAnchoring, EvalError> {
-        let correspondence = CanonicalCorrespondence::new(model, &canonical)?;
+        let correspondence = CanonicalCorrespondence::new(model, &canonical.vertices)?;
         let domain =
             FaceDomain::subdivide(canonical.vertices.len(), &canonical.triangles, subdivision)?;
         Ok(FaceAnchoring {

@@ -5,7 +5,7 @@
 //! trajectories, head motion, camera 0.4–0.8 m away) and render its exact depth with
 //! `visage-render` → corrupt the depth with a [`NoiseModel`] that mimics a CNN's errors (and,
 //! for the face-anchored fusion, track the face with a [`simulate_tracking`] tracker whose
-//! landmarks sit on the ICT face through the [`canonical_correspondence`]) →
+//! landmarks sit on the ICT face through the [`visage_morphable::CanonicalCorrespondence`]) →
 //! run every [`Method`] on the same noisy input → score against the truth ([`metrics`]:
 //! point-to-mesh RMSE/median, jitter, lag, curvature improvement and roughness per ERRATA 13,
 //! time per frame) → [`write_results`] (`results.json`, `results.csv`, SVG plots) and
@@ -15,13 +15,11 @@
 //! timing fields.
 
 mod benchmark;
-pub mod canonical_correspondence;
 mod error;
 mod method;
 pub mod metrics;
 mod noise;
 mod normal;
-pub mod point_to_mesh;
 mod report;
 pub mod simulated_tracker;
 mod svg_plot;

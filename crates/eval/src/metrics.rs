@@ -8,7 +8,7 @@
 //!   nearest pixel sees a [`visage_morphable::Region::Face`] triangle in the GT render;
 //! - **face-anchored vertices**: vertex i is a fixed point of the face; its GT point
 //!   g_k(i) is that material point on frame k's GT mesh (through the
-//!   [`crate::canonical_correspondence`]), and every vertex is in F_k.
+//!   [`visage_morphable::CanonicalCorrespondence`]), and every vertex is in F_k.
 //!
 //! Metrics:
 //! - **surface error** e = distance from s_k(i) to the GT mesh of frame k (exact point-to-mesh),
@@ -35,8 +35,8 @@ use faer::Mat;
 use visage_fem::SurfaceMetrics;
 use visage_fusion::{to_positions, FaceDomain, FusionSetup};
 
-use crate::point_to_mesh::TriangleGrid;
 use crate::synthesis::SyntheticSequence;
+use visage_mesh::point_to_mesh::TriangleGrid;
 
 /// Largest lag searched, frames.
 pub const LAG_MAX: usize = 8;

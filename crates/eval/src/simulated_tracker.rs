@@ -20,10 +20,10 @@ use rand_chacha::ChaCha8Rng;
 use visage_camera::RigidTransform;
 use visage_face::{fit_face_geometry, CanonicalMesh};
 
-use crate::canonical_correspondence::CanonicalCorrespondence;
 use crate::normal::standard_normal;
 use crate::synthesis::SyntheticSequence;
 use crate::EvalError;
+use visage_morphable::CanonicalCorrespondence;
 
 /// The tracker's noise (module docs). Default: 0.5 px white, 0.3 px correlated with ρ = 0.9
 /// (a correlation time of ~10 frames).

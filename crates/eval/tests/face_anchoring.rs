@@ -2,10 +2,10 @@
 //! canonical face: the canonical FaceMesh lands on the ICT face where both models put the same
 //! landmarks, and the simulated tracker reports what it sees.
 
-use visage_eval::canonical_correspondence::LANDMARK_PAIRS;
 use visage_eval::{synthesize, BenchmarkConfig, FaceAnchoring, TrackerNoise};
 use visage_face::CanonicalMesh;
 use visage_morphable::IctModel;
+use visage_morphable::LANDMARK_PAIRS;
 
 /// The ICT-FaceKit subset in `../shared` and the canonical face from the model files (tests
 /// using them are ignored without them).

@@ -3,8 +3,8 @@
 
 use std::path::PathBuf;
 
-use visage_eval::point_to_mesh::TriangleGrid;
 use visage_eval::{synthesize, BenchmarkConfig, SynthesisConfig};
+use visage_mesh::point_to_mesh::TriangleGrid;
 use visage_morphable::IctModel;
 
 /// The ICT-FaceKit subset in `../shared` (tests using it are ignored without it).

@@ -17,6 +17,7 @@ pub mod io;
 mod mask;
 mod one_ring;
 mod planar_mesh;
+pub mod point_to_mesh;
 mod sampling;
 mod trimesh;
 

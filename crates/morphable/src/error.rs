@@ -1,4 +1,4 @@
-//! Errors of the morphable-model importer.
+//! Errors of the morphable-model crate.
 
 use std::path::PathBuf;
 
@@ -35,6 +35,9 @@ pub enum MorphableError {
         name: String,
         available: String,
     },
+    /// A computation without a unique answer.
+    #[error("{what}")]
+    Degenerate { what: &'static str },
     /// Weights given to [`crate::IctModel::shape`] do not match the model's modes.
     #[error("{what}: {got} weights for {expected} modes")]
     WeightCount {

@@ -14,7 +14,7 @@ pub const LANDMARK_COUNT: usize = 68;
 /// The folder inside a checkout of the ICT-FaceKit repository that holds the model.
 const MODEL_FOLDER: &str = "FaceXModel";
 /// The neutral mesh S̄.
-const NEUTRAL_FILE: &str = "generic_neutral_mesh.obj";
+pub(crate) const NEUTRAL_FILE: &str = "generic_neutral_mesh.obj";
 /// Expression names, landmark and fitting vertex sets.
 const INDICES_FILE: &str = "vertex_indices.json";
 

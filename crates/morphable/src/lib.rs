@@ -17,9 +17,18 @@
 //!   two triangles with the file's orientation.
 
 mod error;
+mod face_model;
+pub mod fit;
 mod ict_model;
+mod landmark_correspondence;
 mod regions;
 
 pub use error::MorphableError;
+pub use face_model::FaceModel;
+pub use fit::{FaceFit, FaceFitter, FitOptions};
 pub use ict_model::{IctModel, ImportOptions, LANDMARK_COUNT};
+pub use landmark_correspondence::{
+    CanonicalCorrespondence, SurfacePoint, LANDMARK_PAIRS, LEFT_LOWER_LID, LEFT_UPPER_LID,
+    LOWER_LIP, RIGHT_LOWER_LID, RIGHT_UPPER_LID, UPPER_LIP,
+};
 pub use regions::{Region, CM_TO_M, SOLID_SURFACE_END};

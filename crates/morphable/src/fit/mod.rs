@@ -1,0 +1,11 @@
+//! Fitting the face model to tracked landmarks: head pose, this person's identity, per-frame
+//! expression weights.
+
+pub mod bounded_least_squares;
+mod face_fitter;
+mod landmark_basis;
+pub mod perspective;
+pub mod rigid_pose;
+
+pub use face_fitter::{FaceFit, FaceFitter, FitOptions, FACE_OVAL, FRONTAL};
+pub use landmark_basis::LandmarkBasis;
