@@ -60,6 +60,8 @@ enum Command {
     ///
     /// Apache-2.0 model files from the npm package @mediapipe/face_mesh, sha256-checked.
     Models(commands::models::ModelsArgs),
+    /// Build the compact face model from an ICT-FaceKit folder
+    Model(commands::model::ModelArgs),
     /// Benchmarks against ground truth
     ///
     /// `visage eval synthetic`: ICT-FaceKit sequences with known geometry, CNN-like depth
@@ -77,6 +79,7 @@ fn main() -> ExitCode {
         Command::Render(args) => commands::render::run(args),
         Command::Landmarks(args) => commands::landmarks::run(args),
         Command::Models(args) => commands::models::run(args),
+        Command::Model(args) => commands::model::run(args),
         Command::Eval(args) => commands::eval::run(args),
     };
     exit::report(result)

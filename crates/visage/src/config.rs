@@ -11,6 +11,8 @@ use visage_fusion::{
     ANCHORED_WEIGHTS_MAP, DEFAULT_MAX_DEPTH_M,
 };
 
+use visage_morphable::{FaceModel, FitOptions};
+
 use crate::{Error, Input};
 
 /// Default subdivision of the FaceMesh template for the face mesh (≈ 1.8k vertices).
@@ -61,6 +63,32 @@ pub enum TemporalMode {
     Clip,
 }
 
+/// Which morphable face model is fitted to the landmarks.
+#[derive(Debug, Default)]
+pub enum ModelSource {
+    /// The compact ICT-FaceKit model shipped with visage (30 identity modes, 53 expressions).
+    #[default]
+    Embedded,
+    /// A full ICT-FaceKit folder (its `FaceXModel` folder or a checkout of the repository).
+    IctFolder(PathBuf),
+    /// A model built by the caller.
+    Given(Box<FaceModel>),
+    /// No fit: no blendshapes, no identity.
+    None,
+}
+
+impl ModelSource {
+    /// How `metrics.json` names it.
+    pub fn describe(&self) -> String {
+        match self {
+            ModelSource::Embedded => "embedded".into(),
+            ModelSource::IctFolder(dir) => dir.display().to_string(),
+            ModelSource::Given(_) => "given".into(),
+            ModelSource::None => "none".into(),
+        }
+    }
+}
+
 /// The parameters of a video reconstruction, as `metrics.json` records them.
 #[derive(Clone, Debug, Serialize)]
 pub struct Parameters {
@@ -69,6 +97,8 @@ pub struct Parameters {
     pub mode: TemporalMode,
     /// `"face"` or the depth folder.
     pub depth: String,
+    /// The morphable model fitted: `"embedded"`, an ICT-FaceKit folder, or `"none"`.
+    pub model: String,
 }
 
 /// Sets up a [`crate::Reconstructor`]. Every option has a default: the face mesh on the face
@@ -86,6 +116,8 @@ pub struct Builder {
     pub(crate) spacing: Option<u32>,
     pub(crate) clip: ClipOptions,
     pub(crate) models: Option<PathBuf>,
+    pub(crate) model: ModelSource,
+    pub(crate) fit: FitOptions,
 }
 
 impl Builder {
@@ -146,6 +178,18 @@ impl Builder {
     /// Clip mode's solver options.
     pub fn clip_options(mut self, clip: ClipOptions) -> Self {
         self.clip = clip;
+        self
+    }
+
+    /// The morphable model fitted to the landmarks (default: the embedded one).
+    pub fn model(mut self, model: ModelSource) -> Self {
+        self.model = model;
+        self
+    }
+
+    /// Options of the morphable-model fit.
+    pub fn fit_options(mut self, fit: FitOptions) -> Self {
+        self.fit = fit;
         self
     }
 

@@ -30,6 +30,8 @@ pub enum Error {
     Fusion(#[from] FusionError),
     #[error(transparent)]
     Solver(#[from] FemError),
+    #[error(transparent)]
+    Model(#[from] visage_morphable::MorphableError),
     /// A step failed on one frame (`frame` names its source, `step` what was being done).
     #[error("{frame}: {step}")]
     Frame {

@@ -106,6 +106,11 @@ impl Input {
         Some(self.max_frames.map_or(n, |m| n.min(m)))
     }
 
+    /// Frames per second of the input (a video's stream rate; none for images).
+    pub fn frame_rate(&self) -> Option<f64> {
+        self.source.frame_rate()
+    }
+
     /// The 35 mm-equivalent focal length (mm) in the EXIF of an image input's first image, and
     /// that image's path.
     pub fn exif_focal_35mm(&self) -> Option<(PathBuf, f64)> {

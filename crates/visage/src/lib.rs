@@ -42,10 +42,12 @@
 //! - Frame indices are input indices (a video's frame number, a folder's file number).
 //! - The face mesh's vertex `i < 468` is FaceMesh landmark `i`.
 
+mod animation;
 mod atomic_write;
 mod config;
 mod depth_folder;
 mod error;
+mod gaze;
 mod input;
 mod landmarks;
 mod metrics;
@@ -59,12 +61,20 @@ mod rigid_jitter;
 mod sink;
 mod stages;
 
+pub use animation::{
+    live_link_angles, live_link_timecode, BlendshapeFrame, BlendshapeTrack, BlendshapesJsonWriter,
+    IctSource, IctToArkit, LiveLinkCsvWriter, ARKIT_BLENDSHAPES, ARKIT_BLENDSHAPE_COUNT,
+    BLENDSHAPES_CSV, BLENDSHAPES_JSON, ICT_EXPRESSIONS, ICT_TO_ARKIT, LIVE_LINK_BLENDSHAPES,
+    LIVE_LINK_ROTATIONS, LIVE_LINK_VALUE_COUNT,
+};
 pub use atomic_write::{write_atomically, write_json_atomically};
 pub use config::{
-    check_fov, Builder, Camera, DepthSource, Parameters, TemporalMode, DEFAULT_SUBDIVISION,
+    check_fov, Builder, Camera, DepthSource, ModelSource, Parameters, TemporalMode,
+    DEFAULT_SUBDIVISION,
 };
 pub use depth_folder::{fuse_depth_folder, FuseOptions};
 pub use error::Error;
+pub use gaze::{eye_gaze, eye_look_weights, EyeGaze};
 pub use input::Input;
 pub use landmarks::{FaceRecord, LandmarksFrame, PoseRecord};
 pub use metrics::{
@@ -74,7 +84,7 @@ pub use metrics::{
 pub use output::OutputDir;
 pub use pipeline::QUEUE_CAPACITY;
 pub use quality::{FusedAndRaw, QualitySummary};
-pub use reconstructor::{error_chain, FrameResult, Reconstructor, RunOutcome};
+pub use reconstructor::{error_chain, FrameResult, Identity, Reconstructor, RunOutcome};
 pub use rigid_jitter::rigid_residual_rms;
 pub use sink::{FrameSink, MeshFrame};
 pub use stages::Surfaces;
@@ -84,4 +94,5 @@ pub use visage_fem::{ClipOptions, Weights};
 pub use visage_fusion::{DepthSequence, MeshKind, MeshingOptions, DEFAULT_MAX_DEPTH_M};
 pub use visage_mesh::io::{write_ply, PlyFormat};
 pub use visage_mesh::{TriMesh, TriangulationKind};
+pub use visage_morphable::{FaceModel, FitOptions};
 pub use visage_video::Frame;

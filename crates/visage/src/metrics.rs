@@ -128,6 +128,9 @@ pub struct FrameMetrics {
     /// Frame index in the input (video frame number or position in the folder).
     pub index: usize,
     pub source: String,
+    /// Seconds since the input's first frame (the video's timestamp, or index / frame rate).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_s: Option<f64>,
     pub status: FrameStatus,
     /// Whether the face detector ran (video runs; the rest of the frames were tracked).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -151,6 +154,9 @@ pub struct FrameMetrics {
     /// RMS reprojection error of the rigid face fit (px).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fit_rms_px: Option<f64>,
+    /// Mean distance (px) of the morphable-model fit's landmarks from the tracked ones.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model_fit_px: Option<f64>,
 }
 
 impl FrameMetrics {
@@ -159,6 +165,7 @@ impl FrameMetrics {
         FrameMetrics {
             index,
             source,
+            time_s: None,
             status,
             detector_ran: None,
             ms: StageTimes::default(),
@@ -169,6 +176,7 @@ impl FrameMetrics {
             reprojection_raw_px: None,
             pose: None,
             fit_rms_px: None,
+            model_fit_px: None,
         }
     }
 

@@ -8,11 +8,13 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use visage_camera::Intrinsics;
-use visage_mesh::io::{write_ply_with, PlyFormat};
+use visage_mesh::io::{write_obj, write_ply_with, PlyFormat};
 use visage_mesh::TriMesh;
 
+use crate::animation::{BlendshapeFrame, BlendshapesJsonWriter, LiveLinkCsvWriter};
 use crate::atomic_write::{tmp_path, write_atomically, write_json_atomically};
 use crate::landmarks::LandmarksFrame;
+use crate::reconstructor::Identity;
 use crate::sink::{FrameSink, MeshFrame};
 use crate::Error;
 
@@ -23,8 +25,12 @@ pub struct OutputDir {
     format: PlyFormat,
     /// `landmarks.json.tmp` while the run goes on, and whether a frame was written yet.
     landmarks: Option<(BufWriter<File>, bool)>,
+    blendshapes: Option<(LiveLinkCsvWriter, BlendshapesJsonWriter)>,
     mesh: TriMesh,
 }
+
+/// The frame rate of `blendshapes.csv`'s timecode when the input has none (an image folder).
+pub const DEFAULT_TIMECODE_FPS: f64 = 30.0;
 
 impl OutputDir {
     /// Creates `dir/meshes/` (and `dir/raw/` with `save_raw`).
@@ -41,6 +47,7 @@ impl OutputDir {
             save_raw,
             format,
             landmarks: None,
+            blendshapes: None,
             mesh: TriMesh::new(Vec::new(), Vec::new()),
         })
     }
@@ -61,6 +68,42 @@ impl OutputDir {
         Ok(self)
     }
 
+    /// Starts `blendshapes.csv` (Live Link Face's layout, timecode at `fps`, else
+    /// [`DEFAULT_TIMECODE_FPS`]) and `blendshapes.json`.
+    ///
+    /// # Errors
+    /// When the files cannot be created.
+    pub fn with_blendshapes(mut self, fps: Option<f64>) -> Result<OutputDir, Error> {
+        let csv = LiveLinkCsvWriter::in_dir(&self.dir, fps.unwrap_or(DEFAULT_TIMECODE_FPS))?;
+        let json = BlendshapesJsonWriter::in_dir(&self.dir, fps)?;
+        self.blendshapes = Some((csv, json));
+        Ok(self)
+    }
+
+    /// Writes the fitted identity: `identity.obj` (the neutral face in metres, model frame,
+    /// with UVs) and `identity.json` (the coefficients and how many frames they rest on).
+    ///
+    /// # Errors
+    /// When a file cannot be written.
+    pub fn write_identity(&self, identity: &Identity) -> Result<(), Error> {
+        let path = self.dir.join("identity.obj");
+        let mesh = identity.neutral_mesh();
+        write_atomically(&path, |p| {
+            write_obj(p, &mesh).map_err(|source| Error::WriteMesh {
+                path: p.to_owned(),
+                source,
+            })
+        })?;
+        write_json_atomically(
+            &self.dir.join("identity.json"),
+            &serde_json::json!({
+                "coefficients": identity.coefficients,
+                "frames": identity.frames,
+                "units": "weights of the model's identity modes, each ~ N(0, 1)",
+            }),
+        )
+    }
+
     pub fn dir(&self) -> &Path {
         &self.dir
     }
@@ -75,8 +118,13 @@ impl OutputDir {
         write_json_atomically(&self.dir.join("metrics.json"), report)
     }
 
-    /// Closes `landmarks.json` (also after a failed run: it then lists the frames so far).
+    /// Closes `landmarks.json` and the blendshape files (also after a failed run: they then
+    /// hold the frames so far).
     pub fn finish(&mut self) -> Result<(), Error> {
+        if let Some((csv, json)) = self.blendshapes.take() {
+            csv.finish()?;
+            json.finish()?;
+        }
         let Some((mut w, _)) = self.landmarks.take() else {
             return Ok(());
         };
@@ -108,6 +156,14 @@ impl FrameSink for OutputDir {
         }
         *started = true;
         serde_json::to_writer(&mut *w, record).map_err(|e| write_error(e.into()))
+    }
+
+    fn blendshapes(&mut self, frame: &BlendshapeFrame) -> Result<(), Error> {
+        if let Some((csv, json)) = &mut self.blendshapes {
+            csv.write(frame)?;
+            json.write(frame)?;
+        }
+        Ok(())
     }
 
     fn mesh(&mut self, frame: &MeshFrame<'_>) -> Result<(), Error> {

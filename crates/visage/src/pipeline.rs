@@ -1,9 +1,9 @@
-//! The staged whole-clip run ([`crate::Reconstructor::run`]): three stages on their own
+//! The staged whole-clip run ([`crate::Reconstructor::run`]): four stages on their own
 //! threads, joined by bounded queues ([`QUEUE_CAPACITY`] frames each), and the sink on the
 //! calling thread, frames in input order:
 //!
 //! ```text
-//! decode ──► track + landmarks + fit ──► depth + fuse ──► record + sink (calling thread)
+//! decode ──► track + landmarks + rigid fit ──► eyes + model fit ──► depth + fuse ──► sink
 //! ```
 //!
 //! Memory is flat in the clip length in streaming mode: at most `QUEUE_CAPACITY` frames wait
@@ -23,14 +23,17 @@ use std::time::Instant;
 use visage_camera::Intrinsics;
 use visage_fem::{ClipOptions, SurfaceQuality};
 use visage_fusion::ClipFrame;
+use visage_morphable::FaceFitter;
+use visage_video::Frame;
 
+use crate::animation::BlendshapeFrame;
 use crate::input::Decoded;
 use crate::landmarks::LandmarksFrame;
 use crate::metrics::{FrameMetrics, FrameQuality, RunTiming};
 use crate::process_stats::{cpu_seconds, peak_rss_mib};
 use crate::recorder::Recorder;
 use crate::sink::{FrameSink, MeshFrame};
-use crate::stages::{FaceStage, FuseStage, Surfaces, Tracked};
+use crate::stages::{FaceStage, FuseStage, ModelStage, Surfaces, Tracked};
 use crate::{Error, Input, TemporalMode};
 
 /// Frames waiting between two stages.
@@ -44,6 +47,7 @@ enum ToSink {
         metrics: Box<FrameMetrics>,
         landmarks: Box<LandmarksFrame>,
         warning: Option<String>,
+        blendshapes: Option<Box<BlendshapeFrame>>,
         surfaces: Option<Box<Surfaces>>,
     },
     /// Clip mode, after the clip solve: a frame's final surfaces.
@@ -59,6 +63,7 @@ enum ToSink {
 /// What the stages run with.
 pub(crate) struct Stages {
     pub face: FaceStage,
+    pub model: Option<ModelStage>,
     pub fuse: FuseStage,
     pub mode: TemporalMode,
     pub clip: ClipOptions,
@@ -72,18 +77,20 @@ pub(crate) fn run_stages(
     recorder: &mut Recorder,
     triangles: &mut Vec<[u32; 3]>,
     sink: &mut dyn FrameSink,
-) -> (RunTiming, Option<Error>) {
+) -> (RunTiming, Option<Error>, Option<FaceFitter>) {
     let start = Instant::now();
     let cpu_start = cpu_seconds();
     let Stages {
         mut face,
+        mut model,
         mut fuse,
         mode,
         clip,
     } = stages;
     let k = face.k;
     let (decoded_tx, decoded_rx) = sync_channel::<Decoded>(QUEUE_CAPACITY);
-    let (tracked_tx, tracked_rx) = sync_channel::<Tracked>(QUEUE_CAPACITY);
+    let (tracked_tx, tracked_rx) = sync_channel::<(Tracked, Frame)>(QUEUE_CAPACITY);
+    let (modelled_tx, modelled_rx) = sync_channel::<Tracked>(QUEUE_CAPACITY);
     let (fused_tx, fused_rx) = sync_channel::<ToSink>(QUEUE_CAPACITY);
     let (recycle_tx, recycle_rx) = sync_channel::<Box<Surfaces>>(2 * QUEUE_CAPACITY + 2);
     let mut consumer = Consumer {
@@ -94,9 +101,12 @@ pub(crate) fn run_stages(
     };
     let (errors, sink_error) = std::thread::scope(|scope| {
         let decode = scope.spawn(move || decode_stage(input, decoded_tx));
-        let track = scope.spawn(move || track_stage(&mut face, decoded_rx, tracked_tx));
+        let face = &mut face;
+        let track = scope.spawn(move || track_stage(face, decoded_rx, tracked_tx));
+        let model = &mut model;
+        let modelling = scope.spawn(move || model_stage(model, tracked_rx, modelled_tx));
         let fusion = scope
-            .spawn(move || fuse_stage(&mut fuse, mode, &clip, tracked_rx, fused_tx, recycle_rx));
+            .spawn(move || fuse_stage(&mut fuse, mode, &clip, modelled_rx, fused_tx, recycle_rx));
         let sink_error = consumer.run(fused_rx, recycle_tx).err();
         let join = |h: std::thread::ScopedJoinHandle<'_, Result<(), Error>>, name| {
             h.join().unwrap_or(Err(Error::Panic(name))).err()
@@ -105,6 +115,7 @@ pub(crate) fn run_stages(
             [
                 join(decode, "decode"),
                 join(track, "tracking"),
+                join(modelling, "model"),
                 join(fusion, "fusion"),
             ],
             sink_error,
@@ -117,7 +128,7 @@ pub(crate) fn run_stages(
         cpu_s: cpu_seconds().zip(cpu_start).map(|(b, a)| b - a),
         peak_rss_mib: peak_rss_mib(),
     };
-    (timing, error)
+    (timing, error, model.map(|m| m.fitter))
 }
 
 fn decode_stage(mut input: Input, out: SyncSender<Decoded>) -> Result<(), Error> {
@@ -132,10 +143,28 @@ fn decode_stage(mut input: Input, out: SyncSender<Decoded>) -> Result<(), Error>
 fn track_stage(
     face: &mut FaceStage,
     input: Receiver<Decoded>,
-    out: SyncSender<Tracked>,
+    out: SyncSender<(Tracked, Frame)>,
 ) -> Result<(), Error> {
     for Decoded { frame, decode_ms } in input {
-        if out.send(face.track(&frame, decode_ms)?).is_err() {
+        let tracked = face.track(&frame, decode_ms)?;
+        if out.send((tracked, frame)).is_err() {
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
+fn model_stage(
+    model: &mut Option<ModelStage>,
+    input: Receiver<(Tracked, Frame)>,
+    out: SyncSender<Tracked>,
+) -> Result<(), Error> {
+    for (mut tracked, frame) in input {
+        if let Some(model) = model {
+            model.fit(&frame.image, &mut tracked)?;
+        }
+        drop(frame);
+        if out.send(tracked).is_err() {
             return Ok(());
         }
     }
@@ -188,6 +217,7 @@ fn fuse_stage(
             metrics: Box::new(tracked.metrics),
             landmarks: Box::new(tracked.landmarks),
             warning: tracked.warning,
+            blendshapes: tracked.blendshapes.map(Box::new),
             surfaces,
         };
         if out.send(message).is_err() {
@@ -239,6 +269,7 @@ impl Consumer<'_> {
                     metrics,
                     landmarks,
                     warning,
+                    blendshapes,
                     surfaces,
                 } => {
                     let start = Instant::now();
@@ -246,6 +277,9 @@ impl Consumer<'_> {
                         self.sink.warning(w);
                     }
                     self.sink.landmarks(&landmarks)?;
+                    if let Some(b) = &blendshapes {
+                        self.sink.blendshapes(b)?;
+                    }
                     let position = self.recorder.push(*metrics);
                     if let Some(s) = surfaces {
                         self.mesh(position, &s)?;

@@ -8,14 +8,16 @@ use visage_camera::Intrinsics;
 use visage_face::{model_files, CanonicalMesh, FaceMesh, FaceTracker};
 use visage_fusion::{FaceTemplate, SurfaceFusion};
 use visage_mesh::TriMesh;
+use visage_morphable::{CanonicalCorrespondence, FaceFitter, FaceModel, IctModel};
 use visage_video::Frame;
 
-use crate::config::{Builder, Parameters};
+use crate::animation::{BlendshapeFrame, IctToArkit};
+use crate::config::{Builder, ModelSource, Parameters};
 use crate::landmarks::LandmarksFrame;
 use crate::metrics::{FrameMetrics, MeshSummary, Report, RunStatus, RunSummary, RunTiming};
 use crate::pipeline::{run_stages, Stages};
 use crate::recorder::Recorder;
-use crate::stages::{FaceStage, FuseStage, Surfaces};
+use crate::stages::{FaceStage, FuseStage, ModelStage, Surfaces};
 use crate::{Error, FrameSink, Input, TemporalMode};
 
 /// The video pipeline: face tracking, landmarks and the metric face fit, depth, and fusion into
@@ -27,6 +29,9 @@ pub struct Reconstructor {
     mode: TemporalMode,
     clip: visage_fem::ClipOptions,
     parameters: Parameters,
+    /// The fitted morphable model and its stage, if any.
+    model: Option<Arc<FaceModel>>,
+    model_stage: Option<ModelStage>,
     setup_ms: f64,
     recorder: Recorder,
     /// The last frame's results (reused buffers).
@@ -34,6 +39,7 @@ pub struct Reconstructor {
     mesh: TriMesh,
     landmarks: Option<LandmarksFrame>,
     warning: Option<String>,
+    blendshapes: Option<BlendshapeFrame>,
 }
 
 /// One frame's results from [`Reconstructor::process`].
@@ -45,6 +51,8 @@ pub struct FrameResult<'a> {
     pub landmarks: &'a LandmarksFrame,
     /// Why the frame has no mesh, or a problem worth a warning.
     pub warning: Option<&'a str>,
+    /// ARKit blendshape weights and head rotation of the morphable-model fit.
+    pub blendshapes: Option<&'a BlendshapeFrame>,
     mesh: Option<&'a TriMesh>,
     surfaces: Option<&'a Surfaces>,
 }
@@ -77,6 +85,33 @@ pub struct RunOutcome {
     pub parameters: Parameters,
     pub intrinsics: Intrinsics,
     pub mesh: MeshSummary,
+    /// This person's fitted identity (when the model was fitted to at least one frame).
+    pub identity: Option<Identity>,
+}
+
+/// The identity the fit settled on: coefficients of the model's identity modes and the
+/// neutral face they give.
+#[derive(Clone, Debug)]
+pub struct Identity {
+    /// Weights of the identity modes (~ N(0, 1) a priori).
+    pub coefficients: Vec<f64>,
+    /// Frames whose landmarks went into it.
+    pub frames: usize,
+    model: Arc<FaceModel>,
+}
+
+impl Identity {
+    /// The fitted neutral face: the model's face region with this identity and no expression,
+    /// metres, in the model frame (x to the subject's left, y up, the face looking along +z),
+    /// with the model's UVs.
+    pub fn neutral_mesh(&self) -> TriMesh {
+        let mut vertices = Vec::new();
+        self.model.shape(&self.coefficients, &[], &mut vertices);
+        TriMesh {
+            uvs: self.model.uvs.iter().map(|t| t.map(f64::from)).collect(),
+            ..TriMesh::new(vertices, self.model.triangles.clone())
+        }
+    }
 }
 
 impl RunOutcome {
@@ -118,7 +153,11 @@ impl Reconstructor {
         Builder::default()
     }
 
-    pub(crate) fn new(builder: Builder, k: Intrinsics) -> Result<Reconstructor, Error> {
+    pub(crate) fn new(
+        builder: Builder,
+        k: Intrinsics,
+        fps: Option<f64>,
+    ) -> Result<Reconstructor, Error> {
         let start = Instant::now();
         let params = builder.fusion_params()?;
         let models = builder
@@ -126,7 +165,10 @@ impl Reconstructor {
             .clone()
             .unwrap_or_else(model_files::models_dir);
         let canonical = Arc::new(CanonicalMesh::load(&models)?);
-        let tracker = FaceTracker::new(FaceMesh::load(&models)?);
+        let mut mesh = FaceMesh::load(&models)?;
+        // The eyes run in the model stage (its own thread in `run`), not in the tracker.
+        let iris = mesh.iris.take();
+        let tracker = FaceTracker::new(mesh);
         let template = FaceTemplate {
             vertices: &canonical.vertices,
             triangles: &canonical.triangles,
@@ -136,7 +178,25 @@ impl Reconstructor {
             fusion: params,
             mode: builder.mode,
             depth: builder.depth.describe(),
+            model: builder.model.describe(),
         };
+        let model = match builder.model {
+            ModelSource::Embedded => Some(FaceModel::embedded()),
+            ModelSource::IctFolder(dir) => {
+                let ict = IctModel::load(&dir)?;
+                let landmarks = CanonicalCorrespondence::new(&ict, &canonical.vertices)?;
+                Some(FaceModel::from_ict(&ict, &landmarks)?)
+            }
+            ModelSource::Given(m) => Some(*m),
+            ModelSource::None => None,
+        }
+        .map(Arc::new);
+        let model_stage = model.as_ref().map(|m| ModelStage {
+            k,
+            fitter: FaceFitter::new(m, builder.fit),
+            to_arkit: IctToArkit::new(&m.expression_names),
+            iris,
+        });
         let mut mesh = TriMesh::new(Vec::new(), Vec::new());
         if let Some(t) = fusion.triangles() {
             mesh.triangles = t.to_vec();
@@ -146,7 +206,10 @@ impl Reconstructor {
                 k,
                 canonical: canonical.clone(),
                 tracker,
+                fps,
             },
+            model_stage,
+            model,
             fuse: FuseStage {
                 k,
                 canonical,
@@ -162,6 +225,7 @@ impl Reconstructor {
             mesh,
             landmarks: None,
             warning: None,
+            blendshapes: None,
         })
     }
 
@@ -193,6 +257,9 @@ impl Reconstructor {
     /// A frame of another size than the camera's, a network or fusion failure.
     pub fn process(&mut self, frame: &Frame) -> Result<FrameResult<'_>, Error> {
         let mut tracked = self.face.track(frame, 0.0)?;
+        if let Some(model) = &mut self.model_stage {
+            model.fit(&frame.image, &mut tracked)?;
+        }
         self.fuse.fuse(&mut tracked)?;
         let has_mesh = tracked.metrics.has_mesh();
         let position = self.recorder.push(tracked.metrics);
@@ -212,11 +279,13 @@ impl Reconstructor {
             self.recorder.frames[position].ms.write = start.elapsed().as_secs_f64() * 1e3;
         }
         self.warning = tracked.warning;
+        self.blendshapes = tracked.blendshapes;
         let landmarks = self.landmarks.insert(tracked.landmarks);
         Ok(FrameResult {
             metrics: &self.recorder.frames[position],
             landmarks,
             warning: self.warning.as_deref(),
+            blendshapes: self.blendshapes.as_ref(),
             mesh: has_mesh.then_some(&self.mesh),
             surfaces: has_mesh.then_some(&self.surfaces),
         })
@@ -235,6 +304,8 @@ impl Reconstructor {
             setup_ms,
             mut recorder,
             mesh,
+            model,
+            model_stage,
             ..
         } = self;
         let k = face.k;
@@ -242,11 +313,20 @@ impl Reconstructor {
         let mut triangles = mesh.triangles;
         let stages = Stages {
             face,
+            model: model_stage,
             fuse,
             mode,
             clip,
         };
-        let (timing, error) = run_stages(stages, input, &mut recorder, &mut triangles, sink);
+        let (timing, error, fitter) =
+            run_stages(stages, input, &mut recorder, &mut triangles, sink);
+        let identity = model.zip(fitter).and_then(|(model, fitter)| {
+            (fitter.identity_frames() > 0).then(|| Identity {
+                coefficients: fitter.identity().to_vec(),
+                frames: fitter.identity_frames(),
+                model,
+            })
+        });
         let summary = recorder.summary(RunTiming { setup_ms, ..timing });
         RunOutcome {
             mesh: MeshSummary {
@@ -259,6 +339,7 @@ impl Reconstructor {
             error,
             parameters,
             intrinsics: k,
+            identity,
         }
     }
 }
@@ -271,7 +352,7 @@ impl Builder {
     /// Invalid options, intrinsics for another size, missing or corrupt model files.
     pub fn build(self, width: u32, height: u32) -> Result<Reconstructor, Error> {
         let k = self.intrinsics_for(width, height, None)?;
-        Reconstructor::new(self, k)
+        Reconstructor::new(self, k, None)
     }
 
     /// A reconstructor for `input`'s frames ([`crate::Camera::Auto`]: an image input's EXIF
@@ -281,6 +362,6 @@ impl Builder {
     /// As [`Builder::build`].
     pub fn build_for(self, input: &Input) -> Result<Reconstructor, Error> {
         let k = self.intrinsics_for_input(input)?;
-        Reconstructor::new(self, k)
+        Reconstructor::new(self, k, input.frame_rate())
     }
 }

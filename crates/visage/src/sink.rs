@@ -1,6 +1,7 @@
 //! Where a whole-clip run's results go, frame by frame, in input order
 //! ([`crate::Reconstructor::run`]); [`crate::OutputDir`] writes them to files.
 
+use crate::animation::BlendshapeFrame;
 use crate::landmarks::LandmarksFrame;
 use crate::metrics::FrameMetrics;
 use crate::{Error, Surfaces};
@@ -26,6 +27,12 @@ pub trait FrameSink {
     /// A meshed frame's final surfaces, in input order: right after the frame in streaming
     /// mode, after the clip solve in clip mode.
     fn mesh(&mut self, _frame: &MeshFrame<'_>) -> Result<(), Error> {
+        Ok(())
+    }
+
+    /// A frame's blendshape weights and head and eye rotations (when the model is fitted), in
+    /// input order.
+    fn blendshapes(&mut self, _frame: &BlendshapeFrame) -> Result<(), Error> {
         Ok(())
     }
 

@@ -6,13 +6,19 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+use image::RgbImage;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_face::{
-    fit_face_geometry, render_faces_depth, CanonicalMesh, FaceGeometry, FaceTracker,
+    fit_face_geometry, render_faces_depth, CanonicalMesh, FaceGeometry, FaceTracker, IrisLandmarker,
 };
 use visage_fusion::{ClipFrame, FaceFrame, FusedSurfaces, MeshKind, SurfaceFusion};
+use visage_morphable::fit::rigid_pose::mat3_mul;
+use visage_morphable::fit::FRONTAL;
+use visage_morphable::FaceFitter;
 use visage_video::Frame;
 
+use crate::animation::{live_link_angles, BlendshapeFrame, IctToArkit, ARKIT_BLENDSHAPES};
+use crate::gaze::{eye_gaze, eye_look_weights};
 use crate::landmarks::{FaceRecord, LandmarksFrame};
 use crate::metrics::{FrameMetrics, FrameQuality, FrameStatus, PoseMetrics};
 use crate::{DepthSource, Error};
@@ -21,6 +27,8 @@ use crate::{DepthSource, Error};
 pub(crate) struct TrackedFace {
     /// The 468 landmarks, frame pixels.
     pub landmarks_px: Vec<[f64; 2]>,
+    /// The same as the network gave them (x, y in frame pixels, z relative).
+    pub points: Vec<[f32; 3]>,
     pub geometry: FaceGeometry,
     /// `[x, y, w, h]`, frame pixels.
     pub face_box: [f32; 4],
@@ -34,6 +42,71 @@ pub(crate) struct Tracked {
     pub landmarks: LandmarksFrame,
     /// Warnings for the user (no face, no metric fit).
     pub warning: Option<String>,
+    /// The morphable-model fit's blendshape record (when the model is fitted and a face was).
+    pub blendshapes: Option<BlendshapeFrame>,
+}
+
+/// The morphable-model fit and the eyes: the fitter, the mapping of its expressions to ARKit's
+/// blendshapes, and the iris network when its model file is present.
+pub(crate) struct ModelStage {
+    pub k: Intrinsics,
+    pub fitter: FaceFitter,
+    pub to_arkit: IctToArkit,
+    pub iris: Option<IrisLandmarker>,
+}
+
+impl ModelStage {
+    /// Fits the model to a tracked face (`image` is its frame, for the eyes) and records the
+    /// blendshapes; a frame without a face ends the fit's track.
+    pub fn fit(&mut self, image: &RgbImage, tracked: &mut Tracked) -> Result<(), Error> {
+        let start = Instant::now();
+        let Some(face) = &tracked.face else {
+            self.fitter.lose_track();
+            return Ok(());
+        };
+        let rotation = mat3_mul(&face.geometry.pose.rotation, &FRONTAL);
+        let fit = self.fitter.fit(&self.k, &face.landmarks_px, Some(rotation));
+        let metrics = &mut tracked.metrics;
+        let mut b = BlendshapeFrame::new(metrics.index, metrics.time_s.unwrap_or(0.0));
+        b.weights = self.to_arkit.weights(&fit.expression);
+        b.head = live_link_angles(&mat3_mul(&FRONTAL, &fit.pose.rotation));
+        if let Some(iris) = &mut self.iris {
+            let eyes = iris
+                .eyes(image, &face.points)
+                .map_err(|e| Error::on_frame(&metrics.source, "eyes", e))?;
+            let points = self.fitter.landmark_points();
+            for (eye, corners, left) in [
+                (&eyes.right, [33, 133], false),
+                (&eyes.left, [362, 263], true),
+            ] {
+                let c = eye.iris_center();
+                let corners = corners.map(|i| points[i]);
+                let Some(gaze) = eye_gaze(&self.k, &fit.pose, corners, [c[0] as f64, c[1] as f64])
+                else {
+                    continue;
+                };
+                let side = if left { "Left" } else { "Right" };
+                let look = eye_look_weights(gaze, left);
+                for (name, w) in ["Up", "Down", "In", "Out"].iter().zip(look) {
+                    let name = format!("eyeLook{name}{side}");
+                    if let Some(i) = ARKIT_BLENDSHAPES.iter().position(|n| *n == name) {
+                        b.weights[i] = w as f32;
+                    }
+                }
+                // Live Link Face: yaw positive towards the subject's right, pitch down.
+                let angles = [-gaze.yaw as f32, -gaze.pitch as f32, 0.0];
+                if left {
+                    b.left_eye = angles;
+                } else {
+                    b.right_eye = angles;
+                }
+            }
+        }
+        metrics.model_fit_px = Some(fit.mean_error_px);
+        metrics.ms.fit += start.elapsed().as_secs_f64() * 1e3;
+        tracked.blendshapes = Some(b);
+        Ok(())
+    }
 }
 
 /// Face tracking, landmarks and the metric face fit.
@@ -41,6 +114,8 @@ pub(crate) struct FaceStage {
     pub k: Intrinsics,
     pub canonical: Arc<CanonicalMesh>,
     pub tracker: FaceTracker,
+    /// The input's frame rate, for timestamps of frames that have none.
+    pub fps: Option<f64>,
 }
 
 impl FaceStage {
@@ -65,6 +140,7 @@ impl FaceStage {
                     Ok(geometry) => {
                         faces.push(FaceRecord::new(&face, Some(&geometry)));
                         Some(TrackedFace {
+                            points: face.landmarks.points.clone(),
                             landmarks_px: face
                                 .landmarks
                                 .points
@@ -87,7 +163,11 @@ impl FaceStage {
                 None
             }
         };
+        let time_s = frame
+            .timestamp_s
+            .or_else(|| self.fps.map(|fps| frame.index as f64 / fps));
         let mut metrics = FrameMetrics::new(frame.index, frame.source.clone(), FrameStatus::NoFace);
+        metrics.time_s = time_s;
         metrics.detector_ran = Some(step.detector_ran);
         metrics.ms.decode = decode_ms;
         metrics.ms.track = track_ms;
@@ -103,6 +183,7 @@ impl FaceStage {
                 faces,
             },
             warning,
+            blendshapes: None,
         })
     }
 }

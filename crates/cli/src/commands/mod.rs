@@ -5,6 +5,7 @@ pub mod bench_solver;
 pub mod eval;
 pub mod fuse;
 pub mod landmarks;
+pub mod model;
 pub mod models;
 pub mod render;
 pub mod run;

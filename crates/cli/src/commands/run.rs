@@ -13,9 +13,9 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use indicatif::ProgressBar;
 use visage::{
-    Camera, DepthKind, DepthSequence, DepthSource, FrameMetrics, FrameSink, Input, Intrinsics,
-    LandmarksFrame, MeshFrame, MeshKind, OutputDir, PlyFormat, Reconstructor, TemporalMode,
-    DEFAULT_SUBDIVISION,
+    BlendshapeFrame, Camera, DepthKind, DepthSequence, DepthSource, FrameMetrics, FrameSink, Input,
+    Intrinsics, LandmarksFrame, MeshFrame, MeshKind, ModelSource, OutputDir, PlyFormat,
+    Reconstructor, TemporalMode, DEFAULT_SUBDIVISION,
 };
 
 use crate::progress::progress_bar;
@@ -84,6 +84,13 @@ pub struct PipelineArgs {
     /// executable (see `visage models fetch`).
     #[arg(long)]
     pub models: Option<PathBuf>,
+    /// The morphable face model fitted to the landmarks: an ICT-FaceKit folder (its
+    /// FaceXModel folder or a checkout); default: the compact model built into visage.
+    #[arg(long, conflicts_with = "no_fit")]
+    pub model: Option<PathBuf>,
+    /// No morphable-model fit (no blendshapes, no identity).
+    #[arg(long)]
+    pub no_fit: bool,
     /// No progress bar and no closing line.
     #[arg(long)]
     pub quiet: bool,
@@ -166,6 +173,11 @@ impl PipelineArgs {
         if let Some(dir) = &self.models {
             builder = builder.models_dir(dir);
         }
+        if let Some(dir) = &self.model {
+            builder = builder.model(ModelSource::IctFolder(dir.clone()));
+        } else if self.no_fit {
+            builder = builder.model(ModelSource::None);
+        }
         let reconstructor = builder.build_for(&input)?;
         Ok((input, reconstructor))
     }
@@ -188,6 +200,9 @@ impl<S: FrameSink> FrameSink for Terminal<'_, S> {
     }
     fn mesh(&mut self, frame: &MeshFrame<'_>) -> Result<(), visage::Error> {
         self.sink.mesh(frame)
+    }
+    fn blendshapes(&mut self, frame: &BlendshapeFrame) -> Result<(), visage::Error> {
+        self.sink.blendshapes(frame)
     }
     fn frame_done(&mut self, _: &FrameMetrics) {
         self.bar.inc(1);
@@ -213,7 +228,10 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     } else {
         PlyFormat::BinaryLittleEndian
     };
-    let out = OutputDir::create(&args.out, args.save_raw, format)?.with_landmarks()?;
+    let mut out = OutputDir::create(&args.out, args.save_raw, format)?.with_landmarks()?;
+    if !p.no_fit {
+        out = out.with_blendshapes(input.frame_rate())?;
+    }
     // The camera the meshes are in: `visage render MESH --intrinsics OUT/camera.json`.
     out.write_camera(reconstructor.intrinsics())?;
     let bar = p.progress(&input);
@@ -226,6 +244,9 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let mut out = sink.sink;
     if let (Err(e), None) = (out.finish(), &outcome.error) {
         outcome.error = Some(e);
+    }
+    if let Some(identity) = &outcome.identity {
+        out.write_identity(identity)?;
     }
     out.write_metrics(&outcome.report(&p.input.display().to_string()))?;
     if let Some(e) = outcome.error {

@@ -1,0 +1,133 @@
+//! Gaze from the irises: each eye is a sphere fixed in the head, and the iris centre seen in
+//! the image fixes where on that sphere the eye points.
+//!
+//! The eyeball's centre sits [`EYEBALL_DEPTH_M`] behind the midpoint of the eye's corners, along
+//! the head's backward axis, with radius [`EYEBALL_RADIUS_M`] (an adult eye: 24 mm across; the
+//! corneal apex lies about 12 mm in front of its centre — Bekerman et al. 2014, "Variations in
+//! eyeball diameters of the healthy adults"). The iris centre's pixel ray meets that sphere; the
+//! direction from the centre to that point, in head coordinates, is the gaze. Its yaw and pitch
+//! drive the eye rotations of Live Link Face's CSV and ARKit's `eyeLook*` shapes, which reach 1
+//! at [`EYE_LOOK_FULL_RAD`].
+
+use visage_camera::{Intrinsics, RigidTransform};
+
+/// Eyeball radius (metres).
+pub const EYEBALL_RADIUS_M: f64 = 0.012;
+
+/// Depth of the eyeball's centre behind the eye corners' midpoint (metres).
+pub const EYEBALL_DEPTH_M: f64 = 0.012;
+
+/// The eye rotation at which an `eyeLook*` shape reaches 1 (radians, about 25°).
+pub const EYE_LOOK_FULL_RAD: f64 = 0.436;
+
+/// One eye's gaze relative to the head: yaw (positive towards the subject's left) and pitch
+/// (positive up), radians.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EyeGaze {
+    pub yaw: f64,
+    pub pitch: f64,
+}
+
+/// The gaze of an eye whose corners are at `corners` (model frame: x to the subject's left, y
+/// up, z out of the face; metres) in a head at `pose` (model frame → camera), with its iris
+/// centre at pixel `iris_px`. `None` when the iris ray misses the eyeball.
+pub fn eye_gaze(
+    k: &Intrinsics,
+    pose: &RigidTransform,
+    corners: [[f64; 3]; 2],
+    iris_px: [f64; 2],
+) -> Option<EyeGaze> {
+    let mid: [f64; 3] = std::array::from_fn(|c| 0.5 * (corners[0][c] + corners[1][c]));
+    let centre_model = [mid[0], mid[1], mid[2] - EYEBALL_DEPTH_M];
+    let centre = pose.apply(centre_model);
+    // The iris ray from the camera centre: |s·d − c|² = r², nearer root.
+    let ray = k.ray(iris_px[0], iris_px[1]);
+    let dc: f64 = (0..3).map(|i| ray[i] * centre[i]).sum();
+    let cc: f64 = (0..3).map(|i| centre[i] * centre[i]).sum();
+    let disc = dc * dc - (cc - EYEBALL_RADIUS_M * EYEBALL_RADIUS_M);
+    // A ray that misses (the iris off the modelled eyeball) takes the sphere's nearest point.
+    let s = if disc >= 0.0 { dc - disc.sqrt() } else { dc };
+    let hit: [f64; 3] = std::array::from_fn(|i| s * ray[i] - centre[i]);
+    let r = &pose.rotation;
+    let d: [f64; 3] =
+        std::array::from_fn(|i| r[0][i] * hit[0] + r[1][i] * hit[1] + r[2][i] * hit[2]);
+    let norm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if norm.is_nan() || norm <= 0.0 {
+        return None;
+    }
+    let d = d.map(|c| c / norm);
+    Some(EyeGaze {
+        yaw: d[0].atan2(d[2]),
+        pitch: d[1].clamp(-1.0, 1.0).asin(),
+    })
+}
+
+/// ARKit's `eyeLook{Up,Down,In,Out}` weights of one eye from its gaze; `left_eye` says which
+/// side "in" (towards the nose) is: the subject's left eye looks in towards the subject's
+/// right (negative yaw).
+pub fn eye_look_weights(gaze: EyeGaze, left_eye: bool) -> [f64; 4] {
+    let w = |a: f64| (a / EYE_LOOK_FULL_RAD).clamp(0.0, 1.0);
+    let towards_left = w(gaze.yaw);
+    let towards_right = w(-gaze.yaw);
+    let (inward, outward) = if left_eye {
+        (towards_right, towards_left)
+    } else {
+        (towards_left, towards_right)
+    };
+    [w(gaze.pitch), w(-gaze.pitch), inward, outward]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use visage_morphable::fit::rigid_pose::{exp_so3, mat3_mul};
+    use visage_morphable::fit::FRONTAL;
+
+    /// An eye looking along `dir` (model frame) seen by a camera: the iris centre's pixel.
+    fn iris_pixel(
+        k: &Intrinsics,
+        pose: &RigidTransform,
+        corners: [[f64; 3]; 2],
+        dir: [f64; 3],
+    ) -> [f64; 2] {
+        let mid: [f64; 3] = std::array::from_fn(|c| 0.5 * (corners[0][c] + corners[1][c]));
+        let centre = [mid[0], mid[1], mid[2] - EYEBALL_DEPTH_M];
+        let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
+        let p: [f64; 3] = std::array::from_fn(|c| centre[c] + EYEBALL_RADIUS_M * dir[c] / n);
+        k.project(pose.apply(p))
+    }
+
+    #[test]
+    fn recovers_the_gaze_of_a_turned_head() {
+        let k = Intrinsics::from_fov(640, 480, 60.0).unwrap();
+        let pose = RigidTransform {
+            rotation: mat3_mul(&exp_so3([0.1, 0.3, 0.0]), &FRONTAL),
+            translation: [0.02, 0.0, 0.6],
+        };
+        let corners = [[0.02, 0.03, 0.08], [0.05, 0.03, 0.075]];
+        for (yaw, pitch) in [(0.0, 0.0), (0.3, 0.0), (-0.2, 0.15), (0.1, -0.25)] {
+            let dir = [
+                f64::sin(yaw) * f64::cos(pitch),
+                f64::sin(pitch),
+                f64::cos(yaw) * f64::cos(pitch),
+            ];
+            let px = iris_pixel(&k, &pose, corners, dir);
+            let g = eye_gaze(&k, &pose, corners, px).unwrap();
+            assert!(
+                (g.yaw - yaw).abs() < 1e-6 && (g.pitch - pitch).abs() < 1e-6,
+                "{g:?}"
+            );
+        }
+        let look = eye_look_weights(
+            EyeGaze {
+                yaw: 0.2,
+                pitch: -0.5,
+            },
+            true,
+        );
+        assert_eq!(look[0], 0.0);
+        assert_eq!(look[1], 1.0);
+        assert_eq!(look[2], 0.0);
+        assert!((look[3] - 0.2 / EYE_LOOK_FULL_RAD).abs() < 1e-12);
+    }
+}
