@@ -104,7 +104,7 @@ pub struct Parameters {
 /// Sets up a [`crate::Reconstructor`]. Every option has a default: the face mesh on the face
 /// fit's surface, streaming, the weights that suit the depth source, the camera from the
 /// input, the models from `$VISAGE_MODELS` or `./models`.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct Builder {
     pub(crate) camera: Camera,
     pub(crate) depth: DepthSource,
@@ -118,9 +118,37 @@ pub struct Builder {
     pub(crate) models: Option<PathBuf>,
     pub(crate) model: ModelSource,
     pub(crate) fit: FitOptions,
+    pub(crate) rest_pose: bool,
+}
+
+impl Default for Builder {
+    fn default() -> Self {
+        Builder {
+            camera: Camera::default(),
+            depth: DepthSource::default(),
+            mesh: MeshKind::default(),
+            mode: TemporalMode::default(),
+            lambda: None,
+            mu: None,
+            subdivision: None,
+            spacing: None,
+            clip: ClipOptions::default(),
+            models: None,
+            model: ModelSource::default(),
+            fit: FitOptions::default(),
+            rest_pose: true,
+        }
+    }
 }
 
 impl Builder {
+    /// Whether blendshape weights are relative to the person's resting face, estimated from
+    /// the frames so far (default), or to the model's neutral face.
+    pub fn rest_pose(mut self, on: bool) -> Self {
+        self.rest_pose = on;
+        self
+    }
+
     pub fn camera(mut self, camera: Camera) -> Self {
         self.camera = camera;
         self

@@ -17,6 +17,7 @@ use crate::landmarks::LandmarksFrame;
 use crate::metrics::{FrameMetrics, MeshSummary, Report, RunStatus, RunSummary, RunTiming};
 use crate::pipeline::{run_stages, Stages};
 use crate::recorder::Recorder;
+use crate::rest_pose::RestPose;
 use crate::stages::{FaceStage, FuseStage, ModelStage, Surfaces};
 use crate::{Error, FrameSink, Input, TemporalMode};
 
@@ -196,6 +197,8 @@ impl Reconstructor {
             fitter: FaceFitter::new(m, builder.fit),
             to_arkit: IctToArkit::new(&m.expression_names),
             iris,
+            rest: builder.rest_pose.then(|| RestPose::new(m)),
+            weights: Vec::with_capacity(m.expressions.len()),
         });
         let mut mesh = TriMesh::new(Vec::new(), Vec::new());
         if let Some(t) = fusion.triangles() {

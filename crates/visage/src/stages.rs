@@ -21,6 +21,7 @@ use crate::animation::{live_link_angles, BlendshapeFrame, IctToArkit, ARKIT_BLEN
 use crate::gaze::{eye_gaze, eye_look_weights};
 use crate::landmarks::{FaceRecord, LandmarksFrame};
 use crate::metrics::{FrameMetrics, FrameQuality, FrameStatus, PoseMetrics};
+use crate::rest_pose::RestPose;
 use crate::{DepthSource, Error};
 
 /// A face found and fitted in a frame.
@@ -53,6 +54,10 @@ pub(crate) struct ModelStage {
     pub fitter: FaceFitter,
     pub to_arkit: IctToArkit,
     pub iris: Option<IrisLandmarker>,
+    /// Weights relative to the person's resting face (None: relative to the model's neutral).
+    pub rest: Option<RestPose>,
+    /// Scratch: the calibrated weights.
+    pub weights: Vec<f64>,
 }
 
 impl ModelStage {
@@ -68,7 +73,12 @@ impl ModelStage {
         let fit = self.fitter.fit(&self.k, &face.landmarks_px, Some(rotation));
         let metrics = &mut tracked.metrics;
         let mut b = BlendshapeFrame::new(metrics.index, metrics.time_s.unwrap_or(0.0));
-        b.weights = self.to_arkit.weights(&fit.expression);
+        self.weights.clear();
+        self.weights.extend_from_slice(&fit.expression);
+        if let Some(rest) = &mut self.rest {
+            rest.calibrate(&mut self.weights);
+        }
+        b.weights = self.to_arkit.weights(&self.weights);
         b.head = live_link_angles(&mat3_mul(&FRONTAL, &fit.pose.rotation));
         if let Some(iris) = &mut self.iris {
             let eyes = iris
@@ -81,10 +91,14 @@ impl ModelStage {
             ] {
                 let c = eye.iris_center();
                 let corners = corners.map(|i| points[i]);
-                let Some(gaze) = eye_gaze(&self.k, &fit.pose, corners, [c[0] as f64, c[1] as f64])
+                let Some(mut gaze) =
+                    eye_gaze(&self.k, &fit.pose, corners, [c[0] as f64, c[1] as f64])
                 else {
                     continue;
                 };
+                if let Some(rest) = &mut self.rest {
+                    gaze = rest.calibrate_gaze(left, gaze);
+                }
                 let side = if left { "Left" } else { "Right" };
                 let look = eye_look_weights(gaze, left);
                 for (name, w) in ["Up", "Down", "In", "Out"].iter().zip(look) {

@@ -1,0 +1,204 @@
+//! Expression weights relative to the person's resting face — what Live Link Face calls
+//! calibrating the neutral pose, estimated from the clip instead of asked for.
+//!
+//! The model's neutral face is MediaPipe's mean face; a real person at rest differs from it in
+//! ways the identity modes (learned from scans with neutral expressions) do not cover — eyes
+//! more open, lips pressed — and the fit spends expression weights on them: 0.8 of `eyeWide`
+//! on both sample clips at rest. An animator wants 0 at rest. So, per clip and causally:
+//! - a one-sided shape's rest weight is its [`REST_QUANTILE`] over the frames so far (a face
+//!   rests more often than not; the quantile is robust to the rest), and the output is
+//!   `(w − rest) / (1 − rest)`, clamped to [0, 1];
+//! - each eye's lid is one signed axis, not two independent shapes: the upper lid's height
+//!   `h = a·eyeWide − b·eyeBlink` (a, b: how far the model's shapes move the lid landmark, in
+//!   mm per unit weight) rests at its median; below rest is a blink (`−Δh / b`), above a wide
+//!   eye (`Δh / a`). Without this, a blink of a wide-resting eye only lowers `eyeWide`.
+//!
+//! - gaze is relative to its median per eye: the eyeball model's centre and the eye's own
+//!   optical axis (the angle kappa between the visual and the pupillary axis, ~5°) are not
+//!   known per person, and in face capture the eyes rest on the camera.
+//!
+//! Quantiles come from per-shape histograms of [`BINS`] bins over [0, 1] (lid heights over
+//! their own range), so memory does not grow with the clip.
+
+use visage_morphable::fit::LandmarkBasis;
+use visage_morphable::FaceModel;
+
+use crate::gaze::EyeGaze;
+
+/// The quantile of a one-sided shape's weights taken as its rest value.
+pub const REST_QUANTILE: f64 = 0.1;
+
+/// Histogram bins per shape.
+pub const BINS: usize = 200;
+
+/// FaceMesh's upper-lid centre landmarks: the subject's right eye, then the left.
+const UPPER_LID: [usize; 2] = [159, 386];
+
+/// A streaming quantile over a fixed range.
+#[derive(Clone, Debug)]
+struct Histogram {
+    lo: f64,
+    hi: f64,
+    counts: Vec<u32>,
+    total: u32,
+}
+
+impl Histogram {
+    fn new(lo: f64, hi: f64) -> Histogram {
+        Histogram {
+            lo,
+            hi,
+            counts: vec![0; BINS],
+            total: 0,
+        }
+    }
+
+    fn push(&mut self, v: f64) {
+        let t = ((v - self.lo) / (self.hi - self.lo)).clamp(0.0, 1.0);
+        let bin = ((t * BINS as f64) as usize).min(BINS - 1);
+        self.counts[bin] += 1;
+        self.total += 1;
+    }
+
+    /// The value below which a fraction `q` of the samples lie (bin centre).
+    fn quantile(&self, q: f64) -> f64 {
+        let target = (q * self.total as f64).ceil().max(1.0) as u32;
+        let mut seen = 0;
+        for (bin, &c) in self.counts.iter().enumerate() {
+            seen += c;
+            if seen >= target {
+                return self.lo + (bin as f64 + 0.5) / BINS as f64 * (self.hi - self.lo);
+            }
+        }
+        self.hi
+    }
+}
+
+/// One eye's lid axis: the expression indices and how far they move the upper lid (metres
+/// per unit weight, positive).
+#[derive(Clone, Copy, Debug)]
+struct Lid {
+    wide: usize,
+    blink: usize,
+    up: f64,
+    down: f64,
+}
+
+/// The clip's rest pose so far and the mapping of raw weights to weights relative to it.
+#[derive(Clone, Debug)]
+pub struct RestPose {
+    shapes: Vec<Histogram>,
+    lids: Vec<(Lid, Histogram)>,
+    /// Per eye (the subject's right, then left): yaw and pitch.
+    gaze: [[Histogram; 2]; 2],
+}
+
+/// The range of gaze angles the histograms cover (radians).
+const GAZE_RANGE: f64 = 1.0;
+
+impl RestPose {
+    /// A rest pose for `model`'s expressions, with no frame seen yet.
+    pub fn new(model: &FaceModel) -> RestPose {
+        let basis = LandmarkBasis::new(model);
+        let n_id = basis.identity_count;
+        // Vertical (model y) motion of a lid landmark per unit of an expression.
+        let lift = |landmark: usize, e: usize| basis.row(3 * landmark + 1)[n_id + e];
+        let lids = [("_R", UPPER_LID[0]), ("_L", UPPER_LID[1])]
+            .into_iter()
+            .filter_map(|(side, landmark)| {
+                let wide = model.expression_index(&format!("eyeWide{side}"))?;
+                let blink = model.expression_index(&format!("eyeBlink{side}"))?;
+                let (up, down) = (lift(landmark, wide), -lift(landmark, blink));
+                (up > 0.0 && down > 0.0).then(|| {
+                    let lid = Lid {
+                        wide,
+                        blink,
+                        up,
+                        down,
+                    };
+                    (lid, Histogram::new(-down, up))
+                })
+            })
+            .collect();
+        RestPose {
+            shapes: (0..model.expressions.len())
+                .map(|_| Histogram::new(0.0, 1.0))
+                .collect(),
+            lids,
+            gaze: std::array::from_fn(|_| {
+                std::array::from_fn(|_| Histogram::new(-GAZE_RANGE, GAZE_RANGE))
+            }),
+        }
+    }
+
+    /// Adds an eye's gaze (`left`: the subject's left eye) and returns it relative to the
+    /// eye's median gaze so far.
+    pub fn calibrate_gaze(&mut self, left: bool, gaze: EyeGaze) -> EyeGaze {
+        let [yaw, pitch] = &mut self.gaze[left as usize];
+        yaw.push(gaze.yaw);
+        pitch.push(gaze.pitch);
+        EyeGaze {
+            yaw: gaze.yaw - yaw.quantile(0.5),
+            pitch: gaze.pitch - pitch.quantile(0.5),
+        }
+    }
+
+    /// Adds a frame's raw weights to the estimate and rewrites them relative to the rest pose.
+    pub fn calibrate(&mut self, weights: &mut [f64]) {
+        let mut lid_values = Vec::with_capacity(self.lids.len());
+        for (lid, hist) in &mut self.lids {
+            let h = lid.up * weights[lid.wide] - lid.down * weights[lid.blink];
+            hist.push(h);
+            lid_values.push((*lid, h - hist.quantile(0.5)));
+        }
+        for (w, hist) in weights.iter_mut().zip(&mut self.shapes) {
+            hist.push(*w);
+            let rest = hist.quantile(REST_QUANTILE).min(0.99);
+            *w = ((*w - rest) / (1.0 - rest)).clamp(0.0, 1.0);
+        }
+        for (lid, delta) in lid_values {
+            weights[lid.wide] = (delta / lid.up).clamp(0.0, 1.0);
+            weights[lid.blink] = (-delta / lid.down).clamp(0.0, 1.0);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_resting_offset_is_removed_and_a_blink_of_a_wide_resting_eye_shows() {
+        let model = FaceModel::embedded();
+        let mut rest = RestPose::new(&model);
+        let (wide, blink) = (
+            model.expression_index("eyeWide_R").unwrap(),
+            model.expression_index("eyeBlink_R").unwrap(),
+        );
+        let jaw = model.expression_index("jawOpen").unwrap();
+        let n = model.expressions.len();
+        // A face that rests with eyeWide 0.8 and talks (jawOpen 0.2 at rest, up to 0.7).
+        let frame = |w_wide: f64, w_blink: f64, w_jaw: f64| {
+            let mut w = vec![0.0; n];
+            w[wide] = w_wide;
+            w[blink] = w_blink;
+            w[jaw] = w_jaw;
+            w
+        };
+        for i in 0..100 {
+            let mut w = frame(0.8, 0.0, 0.2 + 0.5 * ((i % 10) as f64 / 10.0));
+            rest.calibrate(&mut w);
+        }
+        let mut at_rest = frame(0.8, 0.0, 0.2);
+        rest.calibrate(&mut at_rest);
+        assert!(at_rest.iter().all(|&w| w < 0.02), "{at_rest:?}");
+        // The lid drops: eyeWide falls to 0 and eyeBlink rises a little.
+        let mut blink_frame = frame(0.0, 0.2, 0.2);
+        rest.calibrate(&mut blink_frame);
+        assert!(blink_frame[blink] > 0.4, "{}", blink_frame[blink]);
+        assert_eq!(blink_frame[wide], 0.0);
+        let mut open = frame(0.8, 0.0, 0.7);
+        rest.calibrate(&mut open);
+        assert!(open[jaw] > 0.55, "{}", open[jaw]);
+    }
+}
