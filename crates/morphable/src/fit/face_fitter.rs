@@ -29,6 +29,7 @@ use faer::{Accum, Mat, Par};
 use visage_camera::{Intrinsics, RigidTransform};
 
 use super::bounded_least_squares::BoxQp;
+use super::contour::Contour;
 use super::landmark_basis::LandmarkBasis;
 use super::perspective::project_with_jacobian;
 use super::rigid_pose::{refine_pose, translation_for_rotation};
@@ -58,6 +59,8 @@ pub const FRONTAL: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0
 pub struct FitOptions {
     /// Landmark noise σ in pixels of the landmark network's 192-pixel crop.
     pub landmark_noise_crop_px: f64,
+    /// Prior standard deviation of an identity weight (the modes are N(0, 1): 1).
+    pub identity_prior: f64,
     /// Prior standard deviation of an expression weight (the weights live in [0, 1]).
     pub expression_prior: f64,
     /// Weight of the L1 term `Σ e_j` (the weights are non-negative, so it is linear): it
@@ -81,9 +84,10 @@ impl Default for FitOptions {
     fn default() -> Self {
         FitOptions {
             landmark_noise_crop_px: 1.0,
+            identity_prior: 1.0,
             expression_prior: 0.3,
             expression_sparsity: 0.0,
-            outline_weight: 0.2,
+            outline_weight: 1.0,
             rigid_motion_m: 0.004,
             gaze_from_landmarks: false,
             iterations: 3,
@@ -108,6 +112,7 @@ pub struct FaceFit {
 /// The fit's state over a clip and its scratch buffers (allocated once).
 pub struct FaceFitter {
     basis: LandmarkBasis,
+    contour: Contour,
     options: FitOptions,
     /// Per landmark: relative weight in the shape solve and in the pose.
     shape_weight: Vec<f64>,
@@ -142,6 +147,8 @@ pub struct FaceFitter {
     /// p and e at the current linearisation.
     previous_identity: Vec<f64>,
     previous_expression: Vec<f64>,
+    /// `[p; e]`, scratch.
+    state: Vec<f64>,
     qp: BoxQp,
 }
 
@@ -149,6 +156,7 @@ impl FaceFitter {
     /// A fitter for `model`'s landmarks.
     pub fn new(model: &FaceModel, options: FitOptions) -> FaceFitter {
         let basis = LandmarkBasis::new(model);
+        let contour = Contour::new(model, &basis);
         let n = basis.landmark_count();
         let (n_id, n_ex) = (basis.identity_count, basis.expression_count);
         let m = n_id + n_ex;
@@ -206,8 +214,10 @@ impl FaceFitter {
             coupling: Mat::zeros(n_ex, n_id + 1),
             previous_identity: vec![0.0; n_id],
             previous_expression: vec![0.0; n_ex],
+            state: Vec::with_capacity(m),
             qp: BoxQp::new(n_ex),
             basis,
+            contour,
         }
     }
 
@@ -298,6 +308,15 @@ impl FaceFitter {
                 &self.rigid_weight,
                 self.options.pose_iterations,
             );
+            if iteration == 0 {
+                self.state.clear();
+                self.state.extend_from_slice(&self.identity);
+                self.state.extend_from_slice(&self.expression);
+                self.contour
+                    .slide(k, &pose, &self.state, landmarks_px, &mut self.basis);
+                self.basis
+                    .landmarks(&self.identity, &self.expression, &mut self.points);
+            }
             self.linearise(k, &pose, landmarks_px, sigma, iteration == 0);
             self.previous_identity.copy_from_slice(&self.identity);
             self.previous_expression.copy_from_slice(&self.expression);
@@ -489,7 +508,7 @@ impl FaceFitter {
                 let v = 0.5 * (self.frame_information[(i, j)] + self.frame_information[(j, i)]);
                 self.h[(i, j)] = self.identity_information[(i, j)] + v;
             }
-            self.h[(i, i)] += 1.0;
+            self.h[(i, i)] += 1.0 / (self.options.identity_prior * self.options.identity_prior);
             self.b[(i, 0)] = self.identity_rhs[i] + self.frame_rhs[i];
         }
         if commit {

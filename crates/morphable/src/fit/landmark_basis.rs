@@ -69,6 +69,20 @@ impl LandmarkBasis {
         &self.modes[row * m..(row + 1) * m]
     }
 
+    /// Makes landmark j the point `mean` moved by `rows` (x, y, z rows of `[U | B]`).
+    ///
+    /// # Panics
+    /// If a row does not have one entry per mode.
+    #[track_caller]
+    pub fn set_landmark(&mut self, j: usize, mean: [f64; 3], rows: [&[f64]; 3]) {
+        let m = self.mode_count();
+        for (c, row) in rows.iter().enumerate() {
+            assert_eq!(row.len(), m, "one entry per mode");
+            self.mean[3 * j + c] = mean[c];
+            self.modes[(3 * j + c) * m..(3 * j + c + 1) * m].copy_from_slice(row);
+        }
+    }
+
     /// All landmarks at identity `p` and expression `e` into `out` (#L, model frame).
     ///
     /// # Panics

@@ -2,10 +2,12 @@
 //! expression weights.
 
 pub mod bounded_least_squares;
+mod contour;
 mod face_fitter;
 mod landmark_basis;
 pub mod perspective;
 pub mod rigid_pose;
 
+pub use contour::Contour;
 pub use face_fitter::{FaceFit, FaceFitter, FitOptions, FACE_OVAL, FRONTAL};
 pub use landmark_basis::LandmarkBasis;
