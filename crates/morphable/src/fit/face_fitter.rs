@@ -30,7 +30,7 @@ use visage_camera::{Intrinsics, RigidTransform};
 
 use super::bounded_least_squares::BoxQp;
 use super::contour::Contour;
-use super::landmark_basis::LandmarkBasis;
+use super::landmark_basis::{dot, LandmarkBasis};
 use super::perspective::project_with_jacobian;
 use super::rigid_pose::{refine_pose, translation_for_rotation};
 use crate::FaceModel;
@@ -63,9 +63,6 @@ pub struct FitOptions {
     pub identity_prior: f64,
     /// Prior standard deviation of an expression weight (the weights live in [0, 1]).
     pub expression_prior: f64,
-    /// Weight of the L1 term `Σ e_j` (the weights are non-negative, so it is linear): it
-    /// prefers one shape that explains a motion to several that share it.
-    pub expression_sparsity: f64,
     /// Relative weight of the face-outline landmarks ([`FACE_OVAL`]).
     pub outline_weight: f64,
     /// A landmark counts for the head pose when no expression moves it by more than this
@@ -86,11 +83,10 @@ impl Default for FitOptions {
             landmark_noise_crop_px: 1.0,
             identity_prior: 1.0,
             expression_prior: 0.3,
-            expression_sparsity: 0.0,
             outline_weight: 1.0,
             rigid_motion_m: 0.004,
             gaze_from_landmarks: false,
-            iterations: 3,
+            iterations: 2,
             pose_iterations: 2,
         }
     }
@@ -149,6 +145,10 @@ pub struct FaceFitter {
     previous_expression: Vec<f64>,
     /// `[p; e]`, scratch.
     state: Vec<f64>,
+    /// Whether `points` hold the landmarks of the current identity and expression.
+    points_current: bool,
+    /// `p − p⁰`, scratch.
+    delta: Vec<f64>,
     qp: BoxQp,
 }
 
@@ -215,6 +215,8 @@ impl FaceFitter {
             previous_identity: vec![0.0; n_id],
             previous_expression: vec![0.0; n_ex],
             state: Vec::with_capacity(m),
+            points_current: false,
+            delta: vec![0.0; n_id],
             qp: BoxQp::new(n_ex),
             basis,
             contour,
@@ -253,6 +255,7 @@ impl FaceFitter {
     pub fn lose_track(&mut self) {
         self.pose = None;
         self.expression.iter_mut().for_each(|e| *e = 0.0);
+        self.points_current = false;
     }
 
     /// Forgets everything, identity included (another person).
@@ -280,8 +283,10 @@ impl FaceFitter {
         let n = self.basis.landmark_count();
         assert_eq!(landmarks_px.len(), n, "one pixel per model landmark");
         let sigma = self.noise_px(landmarks_px);
-        self.basis
-            .landmarks(&self.identity, &self.expression, &mut self.points);
+        if !self.points_current {
+            self.basis
+                .landmarks(&self.identity, &self.expression, &mut self.points);
+        }
         let mut pose = match self.pose {
             Some(p) => p,
             None => {
@@ -314,8 +319,9 @@ impl FaceFitter {
                 self.state.extend_from_slice(&self.expression);
                 self.contour
                     .slide(k, &pose, &self.state, landmarks_px, &mut self.basis);
-                self.basis
-                    .landmarks(&self.identity, &self.expression, &mut self.points);
+                for j in self.contour.landmarks() {
+                    self.points[j] = self.basis.landmark(j, &self.identity, &self.expression);
+                }
             }
             self.linearise(k, &pose, landmarks_px, sigma, iteration == 0);
             self.previous_identity.copy_from_slice(&self.identity);
@@ -327,6 +333,7 @@ impl FaceFitter {
         self.pose = Some(pose);
         self.basis
             .landmarks(&self.identity, &self.expression, &mut self.points);
+        self.points_current = true;
         let mean_error_px = self
             .points
             .iter()
@@ -430,22 +437,22 @@ impl FaceFitter {
     fn solve_expression(&mut self) {
         let (n_id, n_ex) = (self.basis.identity_count, self.basis.expression_count);
         let m = n_id + n_ex;
+        for (d, (p, p0)) in self
+            .delta
+            .iter_mut()
+            .zip(self.identity.iter().zip(&self.previous_identity))
+        {
+            *d = p - p0;
+        }
         for i in 0..n_ex {
-            for j in 0..n_ex {
-                self.q[(i, j)] = self.normal[(n_id + i) * m + n_id + j];
+            let row = &self.normal[(n_id + i) * m..(n_id + i + 1) * m];
+            let (ep, ee) = row.split_at(n_id);
+            for (j, &v) in ee.iter().enumerate() {
+                self.q[(i, j)] = v;
             }
-            self.c[i] = self.gradient[n_id + i]
-                + (0..n_ex)
-                    .map(|j| self.q[(i, j)] * self.previous_expression[j])
-                    .sum::<f64>()
-                - (0..n_id)
-                    .map(|j| {
-                        self.normal[(n_id + i) * m + j]
-                            * (self.identity[j] - self.previous_identity[j])
-                    })
-                    .sum::<f64>();
+            self.c[i] =
+                self.gradient[n_id + i] + dot(ee, &self.previous_expression) - dot(ep, &self.delta);
             self.q[(i, i)] += self.expression_alpha[i];
-            self.c[i] -= self.options.expression_sparsity;
         }
         self.qp
             .solve(self.q.as_ref(), &self.c, 0.0, 1.0, &mut self.expression);
@@ -465,16 +472,12 @@ impl FaceFitter {
             return;
         }
         // ĝ = g + N x⁰ with x⁰ the linearisation point.
+        self.state.clear();
+        self.state.extend_from_slice(&self.previous_identity);
+        self.state.extend_from_slice(&self.previous_expression);
         for i in 0..m {
-            let x0 = |j: usize| {
-                if j < n_id {
-                    self.previous_identity[j]
-                } else {
-                    self.previous_expression[j - n_id]
-                }
-            };
             self.absolute_rhs[i] =
-                self.gradient[i] + (0..m).map(|j| self.normal[i * m + j] * x0(j)).sum::<f64>();
+                self.gradient[i] + dot(&self.normal[i * m..(i + 1) * m], &self.state);
         }
         // S and [N_ep | ĝ_e].
         for i in 0..n_ex {
@@ -492,16 +495,20 @@ impl FaceFitter {
         };
         let solved = llt.solve(&self.coupling);
         for i in 0..n_id {
-            for j in 0..n_id {
-                let schur: f64 = (0..n_ex)
-                    .map(|k| self.normal[i * m + n_id + k] * solved[(k, j)])
-                    .sum();
-                self.frame_information[(i, j)] = self.normal[i * m + j] - schur;
+            let row = &self.normal[i * m..(i + 1) * m];
+            let (pp, pe) = row.split_at(n_id);
+            for j in 0..=n_id {
+                let column = solved.col(j);
+                let schur = match column.try_as_col_major() {
+                    Some(c) => dot(pe, c.as_slice()),
+                    None => (0..n_ex).map(|k| pe[k] * column[k]).sum(),
+                };
+                if j < n_id {
+                    self.frame_information[(i, j)] = pp[j] - schur;
+                } else {
+                    self.frame_rhs[i] = self.absolute_rhs[i] - schur;
+                }
             }
-            let schur: f64 = (0..n_ex)
-                .map(|k| self.normal[i * m + n_id + k] * solved[(k, n_id)])
-                .sum();
-            self.frame_rhs[i] = self.absolute_rhs[i] - schur;
         }
         for i in 0..n_id {
             for j in 0..n_id {

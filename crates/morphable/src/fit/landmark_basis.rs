@@ -91,12 +91,16 @@ impl LandmarkBasis {
     pub fn landmarks(&self, p: &[f64], e: &[f64], out: &mut [[f64; 3]]) {
         assert!(p.len() == self.identity_count && e.len() == self.expression_count);
         for (j, o) in out.iter_mut().enumerate() {
-            for (c, oc) in o.iter_mut().enumerate() {
-                let row = self.row(3 * j + c);
-                let (rp, re) = row.split_at(self.identity_count);
-                *oc = self.mean[3 * j + c] + dot(rp, p) + dot(re, e);
-            }
+            *o = self.landmark(j, p, e);
         }
+    }
+
+    /// Landmark j at identity `p` and expression `e` (model frame).
+    pub fn landmark(&self, j: usize, p: &[f64], e: &[f64]) -> [f64; 3] {
+        std::array::from_fn(|c| {
+            let (rp, re) = self.row(3 * j + c).split_at(self.identity_count);
+            self.mean[3 * j + c] + dot(rp, p) + dot(re, e)
+        })
     }
 
     /// The largest displacement (metres) any single expression at weight 1 gives landmark j:
@@ -114,6 +118,7 @@ impl LandmarkBasis {
 }
 
 /// `Σ a_i b_i`, in four independent sums so the loop vectorises.
+#[inline]
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     let mut s = [0.0; 4];
     let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
