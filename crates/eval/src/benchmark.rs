@@ -15,6 +15,7 @@ use crate::method::{AnchoredInput, Method, MethodInput, MethodRun, VertexKind};
 use crate::metrics::{
     evaluate_sequence, MethodSummary, MetricAccumulator, PerFrame, Scored, VertexSet, VertexTruth,
 };
+use crate::model_fit::{self, benchmark_face_model, ModelFitSummary};
 use crate::noise::{NoiseGenerator, NoiseModel};
 use crate::simulated_tracker::{simulate_tracking, TrackedSequence, TrackerNoise};
 use crate::synthesis::{synthesize, SynthesisConfig, SyntheticSequence};
@@ -246,6 +247,9 @@ pub struct BenchmarkResults {
     pub methods: BTreeMap<String, MethodSummary>,
     /// Per method, per frame index (mean over sequences).
     pub per_frame: BTreeMap<String, PerFrame>,
+    /// The face-model fit against the generator's expressions and identity (with the
+    /// face-anchored set-up).
+    pub model_fit: Option<ModelFitSummary>,
 }
 
 /// A sequence with its noisy input, the input's meshing domain and, for the face-anchored
@@ -483,6 +487,10 @@ pub fn run_benchmark(
     let methods = methods(taubin_tuning.iterations, anchoring.is_some());
     let mut accumulators = vec![MetricAccumulator::default(); methods.len()];
     let mut sequences = Vec::new();
+    let face_model = anchoring
+        .map(|a| benchmark_face_model(model, &a.correspondence))
+        .transpose()?;
+    let mut model_scores = Vec::new();
     for s in 0..config.sequences {
         let seed = sequence_seed(config.seed, s);
         progress(&format!(
@@ -491,6 +499,14 @@ pub fn run_benchmark(
             config.sequences
         ));
         let seq = PreparedSequence::new(model, anchoring, &config, seed)?;
+        if let (Some(face_model), Some(tracking)) = (&face_model, &seq.tracking) {
+            progress(&format!(
+                "sequence {}/{}: face model fit",
+                s + 1,
+                config.sequences
+            ));
+            model_scores.push(model_fit::score(model, face_model, &seq.truth, tracking));
+        }
         let setup = seq.setup(&config)?;
         let input = seq.input(&config, config.weights, config.anchored_weights);
         let runs: Vec<MethodRun> = methods
@@ -530,6 +546,7 @@ pub fn run_benchmark(
         per_frame: names
             .zip(accumulators.iter().map(|a| a.per_frame()))
             .collect(),
+        model_fit: (!model_scores.is_empty()).then(|| ModelFitSummary::of(&model_scores)),
     })
 }
 

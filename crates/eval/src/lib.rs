@@ -18,6 +18,7 @@ mod benchmark;
 mod error;
 mod method;
 pub mod metrics;
+pub mod model_fit;
 mod noise;
 mod normal;
 mod report;

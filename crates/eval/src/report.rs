@@ -56,6 +56,20 @@ pub fn table(results: &BenchmarkResults) -> String {
             m.ms_per_frame
         );
     }
+    if let Some(f) = &results.model_fit {
+        let m = &f.mean;
+        let _ = writeln!(
+            s,
+            "face model fit ({} sequences): expression MAE {:.3}, identity {:.2} mm after scale \
+             (scale off by {:.1} %), reprojection {:.2} px, {:.2} ms/frame",
+            f.sequences,
+            m.expression_mae,
+            m.identity_rmse_mm,
+            100.0 * m.identity_scale_error,
+            m.reprojection_px,
+            m.ms_per_frame
+        );
+    }
     s
 }
 

@@ -497,18 +497,17 @@ impl FaceFitter {
         for i in 0..n_id {
             let row = &self.normal[i * m..(i + 1) * m];
             let (pp, pe) = row.split_at(n_id);
-            for j in 0..=n_id {
+            let schur = |j: usize| -> f64 {
                 let column = solved.col(j);
-                let schur = match column.try_as_col_major() {
+                match column.try_as_col_major() {
                     Some(c) => dot(pe, c.as_slice()),
                     None => (0..n_ex).map(|k| pe[k] * column[k]).sum(),
-                };
-                if j < n_id {
-                    self.frame_information[(i, j)] = pp[j] - schur;
-                } else {
-                    self.frame_rhs[i] = self.absolute_rhs[i] - schur;
                 }
+            };
+            for (j, &v) in pp.iter().enumerate() {
+                self.frame_information[(i, j)] = v - schur(j);
             }
+            self.frame_rhs[i] = self.absolute_rhs[i] - schur(n_id);
         }
         for i in 0..n_id {
             for j in 0..n_id {
