@@ -60,10 +60,11 @@ pub fn table(results: &BenchmarkResults) -> String {
         let m = &f.mean;
         let _ = writeln!(
             s,
-            "face model fit ({} sequences): expression MAE {:.3}, identity {:.2} mm after scale \
-             (scale off by {:.1} %), reprojection {:.2} px, {:.2} ms/frame",
+            "face model fit ({} sequences): expression MAE {:.3} (all-zero guess {:.3}), identity \
+             {:.2} mm after scale (scale off by {:.1} %), reprojection {:.2} px, {:.2} ms/frame",
             f.sequences,
             m.expression_mae,
+            m.zero_guess_mae,
             m.identity_rmse_mm,
             100.0 * m.identity_scale_error,
             m.reprojection_px,
