@@ -108,6 +108,26 @@ fn a_short_clip_gives_a_mesh_landmarks_and_metrics_per_frame() {
     );
     assert!(fused > 0.0 && fused < raw, "fused {fused} raw {raw}");
     assert!(q["reprojection_px"]["fused"].as_f64().unwrap() < 5.0);
+    // The face-model fit's outputs: a Live Link Face row per frame (61 values after the
+    // timecode and the count), the same in JSON with timestamps, the fitted neutral face.
+    let csv = std::fs::read_to_string(out.join("blendshapes.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert_eq!(rows.len(), 9, "a header and 8 rows");
+    assert!(rows[0].starts_with("Timecode,BlendShapeCount,EyeBlinkLeft,"));
+    assert_eq!(rows[1].split(',').count(), 63);
+    assert!(rows[1].starts_with("00:00:00:00.000,61,"), "{}", rows[1]);
+    let b = json(&out.join("blendshapes.json"));
+    assert_eq!(b["frames"].as_array().unwrap().len(), 8);
+    assert!((b["fps"].as_f64().unwrap() - 30.0).abs() < 0.5);
+    let t7 = b["frames"][7]["timestamp_s"].as_f64().unwrap();
+    assert!((t7 - 7.0 / 30.0).abs() < 0.01, "{t7}");
+    let identity = visage_mesh::io::read_obj(&out.join("identity.obj")).unwrap();
+    assert_eq!(identity.uvs.len(), identity.vertices.len());
+    assert_eq!(json(&out.join("identity.json"))["frames"], 8);
+    for f in frames {
+        assert!(f["model_fit_px"].as_f64().unwrap() < 5.0);
+        assert!(f["time_s"].as_f64().unwrap() >= 0.0);
+    }
 }
 
 #[test]

@@ -168,7 +168,7 @@ impl Reconstructor {
         let canonical = Arc::new(CanonicalMesh::load(&models)?);
         let mut mesh = FaceMesh::load(&models)?;
         // The eyes run in the model stage (its own thread in `run`), not in the tracker.
-        let iris = mesh.iris.take();
+        let iris = mesh.iris.take().map(|net| [net.clone(), net]);
         let tracker = FaceTracker::new(mesh);
         let template = FaceTemplate {
             vertices: &canonical.vertices,

@@ -9,7 +9,8 @@ use std::time::Instant;
 use image::RgbImage;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_face::{
-    fit_face_geometry, render_faces_depth, CanonicalMesh, FaceGeometry, FaceTracker, IrisLandmarker,
+    fit_face_geometry, render_faces_depth, CanonicalMesh, Eye, Eyes, FaceGeometry, FaceTracker,
+    IrisLandmarker,
 };
 use visage_fusion::{ClipFrame, FaceFrame, FusedSurfaces, MeshKind, SurfaceFusion};
 use visage_morphable::fit::rigid_pose::mat3_mul;
@@ -53,7 +54,8 @@ pub(crate) struct ModelStage {
     pub k: Intrinsics,
     pub fitter: FaceFitter,
     pub to_arkit: IctToArkit,
-    pub iris: Option<IrisLandmarker>,
+    /// One iris network per eye, so the two run at once.
+    pub iris: Option<[IrisLandmarker; 2]>,
     /// Weights relative to the person's resting face (None: relative to the model's neutral).
     pub rest: Option<RestPose>,
     /// Scratch: the calibrated weights.
@@ -80,10 +82,17 @@ impl ModelStage {
         }
         b.weights = self.to_arkit.weights(&self.weights);
         b.head = live_link_angles(&mat3_mul(&FRONTAL, &fit.pose.rotation));
-        if let Some(iris) = &mut self.iris {
-            let eyes = iris
-                .eyes(image, &face.points)
-                .map_err(|e| Error::on_frame(&metrics.source, "eyes", e))?;
+        if let Some([right_net, left_net]) = &mut self.iris {
+            let points = &face.points;
+            let (right, left) = rayon::join(
+                || right_net.eye(image, points, Eye::Right),
+                || left_net.eye(image, points, Eye::Left),
+            );
+            let eye_error = |e| Error::on_frame(&metrics.source, "eyes", e);
+            let eyes = Eyes {
+                right: right.map_err(eye_error)?,
+                left: left.map_err(eye_error)?,
+            };
             let points = self.fitter.landmark_points();
             for (eye, corners, left) in [
                 (&eyes.right, [33, 133], false),

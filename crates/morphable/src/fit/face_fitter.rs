@@ -5,17 +5,20 @@
 //! projected through the camera's Jacobian at the current estimate (perspective with the known
 //! intrinsics, not scaled orthographic).
 //!
-//! - **Identity** `p` is one vector for the whole clip: every frame adds its normal equations
-//!   (the information its landmarks carry about p, given its expression) to a running sum, and p
-//!   is solved from that sum — it settles as frames accumulate and does not follow expressions.
+//! - **Identity** `p` is one vector for the whole clip: every frame adds the information its
+//!   landmarks carry about p — its normal equations with the frame's expression integrated out
+//!   (a Schur complement, see `solve_identity`) — to a running sum, and p is solved from that
+//!   sum: it settles as frames accumulate, does not follow expressions, and takes the shape the
+//!   face keeps in every frame (which each frame's expression would otherwise pay for).
 //! - **Expression** `e` is per frame and bounded to [0, 1] by a box-constrained solve
 //!   ([`super::bounded_least_squares`]), warm-started from the previous frame.
 //! - **Weights**: landmark residuals are divided by their noise σ, in pixels of the landmark
 //!   network's 192-pixel crop scaled to the frame by the face's size, so W does not depend on
 //!   the resolution; the priors then read in the modes' own units: identity weights ~ N(0, 1)
 //!   (α = 1), expression weights with a prior standard deviation [`FitOptions::expression_prior`].
-//!   The face outline's landmarks slide along the silhouette as the head turns rather than
-//!   staying on one point of the skin: they count with [`FitOptions::outline_weight`].
+//!   The face outline's side landmarks are silhouette points: they slide to the model vertex
+//!   nearest them each frame ([`super::Contour`]) and count with
+//!   [`FitOptions::outline_weight`].
 //! - **Cost**: each alternation is a Gauss–Newton step with the exact perspective gradient
 //!   `AᵀW(ℓ − π)`; the normal matrix `AᵀWA` (the 7 million multiply-adds of a frame) is
 //!   formed once per frame, in single precision, at the frame's first linearisation and reused
