@@ -82,7 +82,7 @@ pub use metrics::{
     FrameMetrics, FrameQuality, FrameStatus, MeshSummary, Percentiles, PoseMetrics, Report,
     RunStatus, RunSummary, RunTiming, SolverSummary, StageTimes,
 };
-pub use output::OutputDir;
+pub use output::{OutputDir, DEFAULT_TIMECODE_FPS};
 pub use pipeline::QUEUE_CAPACITY;
 pub use quality::{FusedAndRaw, QualitySummary};
 pub use reconstructor::{error_chain, FrameResult, Identity, Reconstructor, RunOutcome};
