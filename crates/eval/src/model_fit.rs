@@ -13,6 +13,7 @@
 use std::time::Instant;
 
 use serde::Serialize;
+use visage_morphable::fit::rms_after_scale;
 use visage_morphable::{FaceFitter, FaceModel, FitOptions, IctModel, Region};
 
 use crate::simulated_tracker::TrackedSequence;
@@ -115,30 +116,6 @@ pub fn score(
         reprojection_px: reprojection / scored.max(1) as f64,
         ms_per_frame,
     }
-}
-
-/// RMS distance between `a` and `b` after the best uniform scale of `a` about its centroid
-/// (and translation), and that scale.
-fn rms_after_scale(a: &[[f64; 3]], b: &[[f64; 3]]) -> (f64, f64) {
-    let centroid = |v: &[[f64; 3]]| -> [f64; 3] {
-        std::array::from_fn(|c| v.iter().map(|p| p[c]).sum::<f64>() / v.len() as f64)
-    };
-    let (ca, cb) = (centroid(a), centroid(b));
-    let dot = |p: &[f64; 3], pc: [f64; 3], q: &[f64; 3], qc: [f64; 3]| -> f64 {
-        (0..3).map(|c| (p[c] - pc[c]) * (q[c] - qc[c])).sum()
-    };
-    let s = a.iter().zip(b).map(|(p, q)| dot(p, ca, q, cb)).sum::<f64>()
-        / a.iter().map(|p| dot(p, ca, p, ca)).sum::<f64>();
-    let sq: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(p, q)| {
-            (0..3)
-                .map(|c| (s * (p[c] - ca[c]) - (q[c] - cb[c])).powi(2))
-                .sum::<f64>()
-        })
-        .sum();
-    ((sq / a.len() as f64).sqrt(), s)
 }
 
 /// Scores over sequences, averaged.

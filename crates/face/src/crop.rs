@@ -3,6 +3,7 @@
 
 use image::RgbImage;
 
+use crate::bilinear::sample_rgb;
 use crate::Roi;
 
 /// Fills `out` (`side × side × 3`, row-major RGB) with the ROI of `image`, values `pixel / 255`.
@@ -33,16 +34,8 @@ pub fn crop_roi(image: &RgbImage, roi: &Roi, side: usize, out: &mut [f32]) {
             let x = i as f32 * inv - 0.5;
             let fx = (roi.center[0] + (c * x - s * y) * roi.size).clamp(0.0, max_x);
             let fy = (roi.center[1] + (s * x + c * y) * roi.size).clamp(0.0, max_y);
-            let (x0, y0) = (fx.floor() as usize, fy.floor() as usize);
-            let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-            let (ax, ay) = (fx - x0 as f32, fy - y0 as f32);
             let o = (j * side + i) * 3;
-            for ch in 0..3 {
-                let p = |xx: usize, yy: usize| src[(yy * w + xx) * 3 + ch] as f32;
-                let top = p(x0, y0) + ax * (p(x1, y0) - p(x0, y0));
-                let bottom = p(x0, y1) + ax * (p(x1, y1) - p(x0, y1));
-                out[o + ch] = (top + ay * (bottom - top)) * (1.0 / 255.0);
-            }
+            sample_rgb(src, w, h, fx, fy, &mut out[o..o + 3]);
         }
     }
 }

@@ -7,6 +7,7 @@
 
 use image::RgbImage;
 
+use crate::bilinear::sample_rgb;
 use crate::IRIS_INPUT;
 
 /// Side of the eye crop divided by the distance between the eye's corners.
@@ -117,21 +118,10 @@ impl EyeCrop {
         let (max_x, max_y) = ((w - 1) as f32, (h - 1) as f32);
         for j in 0..side {
             let fy = (self.y0 + self.scale * j as f32).clamp(0.0, max_y);
-            let y0 = fy.floor() as usize;
-            let y1 = (y0 + 1).min(h - 1);
-            let ay = fy - y0 as f32;
             for i in 0..side {
                 let fx = self.frame_x(i as f32).clamp(0.0, max_x);
-                let x0 = fx.floor() as usize;
-                let x1 = (x0 + 1).min(w - 1);
-                let ax = fx - x0 as f32;
                 let o = (j * side + i) * 3;
-                for ch in 0..3 {
-                    let p = |xx: usize, yy: usize| src[(yy * w + xx) * 3 + ch] as f32;
-                    let top = p(x0, y0) + ax * (p(x1, y0) - p(x0, y0));
-                    let bottom = p(x0, y1) + ax * (p(x1, y1) - p(x0, y1));
-                    out[o + ch] = (top + ay * (bottom - top)) * (1.0 / 255.0);
-                }
+                sample_rgb(src, w, h, fx, fy, &mut out[o..o + 3]);
             }
         }
     }

@@ -7,7 +7,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use visage_camera::{Intrinsics, RigidTransform};
 use visage_morphable::fit::rigid_pose::{exp_so3, mat3_mul};
-use visage_morphable::fit::{LandmarkBasis, FRONTAL};
+use visage_morphable::fit::{rms_after_scale, LandmarkBasis, FRONTAL};
 use visage_morphable::{FaceFitter, FaceModel, FitOptions};
 
 fn normal(rng: &mut ChaCha8Rng) -> f64 {
@@ -87,30 +87,6 @@ fn clip(model: &FaceModel, seed: u64, frames: usize) -> Clip {
     out
 }
 
-/// RMS distance between two point sets after the best similarity (scale and translation; the
-/// rotation is shared, both in the model frame) of `a` onto `b`.
-fn rms_after_scale(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    let centroid = |v: &[[f64; 3]]| -> [f64; 3] {
-        std::array::from_fn(|c| v.iter().map(|p| p[c]).sum::<f64>() / v.len() as f64)
-    };
-    let (ca, cb) = (centroid(a), centroid(b));
-    let dot = |p: &[f64; 3], q: &[f64; 3], pc: [f64; 3], qc: [f64; 3]| -> f64 {
-        (0..3).map(|c| (p[c] - pc[c]) * (q[c] - qc[c])).sum()
-    };
-    let s = a.iter().zip(b).map(|(p, q)| dot(p, q, ca, cb)).sum::<f64>()
-        / a.iter().map(|p| dot(p, p, ca, ca)).sum::<f64>();
-    let sq: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(p, q)| {
-            (0..3)
-                .map(|c| (s * (p[c] - ca[c]) - (q[c] - cb[c])).powi(2))
-                .sum::<f64>()
-        })
-        .sum();
-    (sq / a.len() as f64).sqrt()
-}
-
 #[test]
 fn recovers_identity_expressions_and_pose() {
     let model = FaceModel::embedded();
@@ -138,7 +114,7 @@ fn recovers_identity_expressions_and_pose() {
     let (mut fitted, mut truth) = (Vec::new(), Vec::new());
     model.shape(fitter.identity(), &[], &mut fitted);
     model.shape(&clip.identity, &[], &mut truth);
-    let identity_rmse = rms_after_scale(&fitted, &truth);
+    let (identity_rmse, _) = rms_after_scale(&fitted, &truth);
     eprintln!(
         "expression MAE {mae:.4}, identity RMSE (after scale) {:.2} mm, reprojection {reprojection:.3} px, rotation entries within {rotation_error:.4}",
         identity_rmse * 1e3

@@ -7,7 +7,9 @@ mod face_fitter;
 mod landmark_basis;
 pub mod perspective;
 pub mod rigid_pose;
+mod shape_error;
 
 pub use contour::Contour;
 pub use face_fitter::{FaceFit, FaceFitter, FitOptions, FACE_OVAL, FRONTAL};
 pub use landmark_basis::LandmarkBasis;
+pub use shape_error::rms_after_scale;
