@@ -61,4 +61,4 @@ for frame in 000000 000060 000120 000180; do
   "$bin" render "$out/meshes/$frame.ply" --intrinsics "$out/camera.json" --out "$out/preview_$frame.png"
   "$bin" render "$out/raw/$frame.ply" --intrinsics "$out/camera.json" --out "$out/preview_${frame}_raw.png"
 done
-echo "setup: sample written to $out/ (meshes/*.ply, metrics.json, landmarks.json, previews preview_*.png)"
+echo "setup: sample written to $out/ (meshes/*.ply, blendshapes.csv, identity.obj, metrics.json, landmarks.json, previews preview_*.png)"
