@@ -65,26 +65,26 @@ fn ratio(s: &serde_json::Value) -> Option<(i64, i64)> {
     (a > 0 && b > 0).then_some((a, b))
 }
 
-/// [`probe`] and the stream's time base.
-fn probe_stream(path: &Path) -> Result<(VideoInfo, Option<TimeBase>), VideoError> {
-    let out = Command::new("ffprobe")
-        .args([
-            "-v",
-            "error",
-            "-select_streams",
-            "v:0",
-            "-show_streams",
-            "-of",
-            "json",
-        ])
+/// Runs `ffprobe` on the first video stream of `path` with the `show` options (what to list
+/// and in which format); its errors are captured in the output, not printed.
+fn ffprobe_first_video(path: &Path, show: &[&str]) -> std::io::Result<std::process::Output> {
+    Command::new("ffprobe")
+        .args(["-v", "error", "-select_streams", "v:0"])
+        .args(show)
         .arg(path)
         .stdin(Stdio::null())
         .output()
-        .map_err(|e| VideoError::ToolMissing {
+}
+
+/// [`probe`] and the stream's time base.
+fn probe_stream(path: &Path) -> Result<(VideoInfo, Option<TimeBase>), VideoError> {
+    let out = ffprobe_first_video(path, &["-show_streams", "-of", "json"]).map_err(|e| {
+        VideoError::ToolMissing {
             path: path.to_owned(),
             tool: "ffprobe",
             reason: e.to_string(),
-        })?;
+        }
+    })?;
     let not_video = |reason: String| VideoError::NotVideo {
         path: path.to_owned(),
         reason,
@@ -134,22 +134,11 @@ fn probe_stream(path: &Path) -> Result<(VideoInfo, Option<TimeBase>), VideoError
 /// when `ffprobe` lists no packets or a kept packet has no timestamp. A file cut short lists
 /// the packets before the cut.
 fn packet_timestamps(path: &Path, time_base: TimeBase) -> Option<Vec<f64>> {
-    let out = Command::new("ffprobe")
-        .args([
-            "-v",
-            "error",
-            "-select_streams",
-            "v:0",
-            "-show_entries",
-            "packet=pts,flags",
-            "-of",
-            "csv=p=0",
-        ])
-        .arg(path)
-        .stdin(Stdio::null())
-        .stderr(Stdio::null())
-        .output()
-        .ok()?;
+    let out = ffprobe_first_video(
+        path,
+        &["-show_entries", "packet=pts,flags", "-of", "csv=p=0"],
+    )
+    .ok()?;
     let mut pts = parse_packet_list(&String::from_utf8_lossy(&out.stdout))?;
     pts.sort_unstable();
     let first = *pts.first()?;

@@ -5,28 +5,25 @@ use std::process::Command;
 
 use visage_video::{probe, FrameSource, VideoError};
 
-/// Writes a 2-second 64×48 test pattern at 10 fps (20 frames).
-fn test_video(dir: &Path) -> PathBuf {
-    let path = dir.join("pattern.mp4");
+/// Encodes FFmpeg's 64×48 test pattern at 10 fps for `seconds` into `dir/name` with H.264,
+/// `extra` output options (filters, GOP, container flags) before the file name.
+fn encode_pattern(dir: &Path, name: &str, seconds: u32, extra: &[&str]) -> PathBuf {
+    let path = dir.join(name);
+    let source = format!("testsrc=size=64x48:rate=10:duration={seconds}");
     let status = Command::new("ffmpeg")
-        .args([
-            "-v",
-            "error",
-            "-y",
-            "-f",
-            "lavfi",
-            "-i",
-            "testsrc=size=64x48:rate=10:duration=2",
-            "-pix_fmt",
-            "yuv420p",
-            "-c:v",
-            "libx264",
-        ])
+        .args(["-v", "error", "-y", "-f", "lavfi", "-i", &source])
+        .args(extra)
+        .args(["-pix_fmt", "yuv420p", "-c:v", "libx264"])
         .arg(&path)
         .status()
         .unwrap();
     assert!(status.success());
     path
+}
+
+/// Writes a 2-second test pattern (20 frames).
+fn test_video(dir: &Path) -> PathBuf {
+    encode_pattern(dir, "pattern.mp4", 2, &[])
 }
 
 #[test]
@@ -57,33 +54,12 @@ fn decodes_every_frame_of_a_video() {
 fn truncated_video_yields_readable_frames_then_names_the_break() {
     let dir = tempfile::tempdir().unwrap();
     // 50 frames, index up front (faststart), short GOPs: half the file holds whole frames.
-    let path = dir.path().join("long.mp4");
-    let status = Command::new("ffmpeg")
-        .args([
-            "-v",
-            "error",
-            "-y",
-            "-f",
-            "lavfi",
-            "-i",
-            "testsrc=size=64x48:rate=10:duration=5",
-        ])
-        .args([
-            "-pix_fmt",
-            "yuv420p",
-            "-c:v",
-            "libx264",
-            "-bf",
-            "0",
-            "-g",
-            "5",
-            "-movflags",
-            "+faststart",
-        ])
-        .arg(&path)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    let path = encode_pattern(
+        dir.path(),
+        "long.mp4",
+        5,
+        &["-bf", "0", "-g", "5", "-movflags", "+faststart"],
+    );
     let bytes = std::fs::read(&path).unwrap();
     let cut = dir.path().join("cut.mp4");
     std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
@@ -167,27 +143,12 @@ fn variable_frame_rate_keeps_every_frame_at_its_own_time() {
     let dir = tempfile::tempdir().unwrap();
     // 20 frames of a 10 fps pattern, the later ones spread out (setpts). Matroska keeps
     // variable timestamps by default (MP4 would be made constant-rate without an option).
-    let path = dir.path().join("vfr.mkv");
-    let status = Command::new("ffmpeg")
-        .args([
-            "-v",
-            "error",
-            "-y",
-            "-f",
-            "lavfi",
-            "-i",
-            "testsrc=size=64x48:rate=10:duration=2",
-            "-vf",
-            "setpts='if(lt(N,10),N/10,1+(N-10)/5)/TB'",
-            "-pix_fmt",
-            "yuv420p",
-            "-c:v",
-            "libx264",
-        ])
-        .arg(&path)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    let path = encode_pattern(
+        dir.path(),
+        "vfr.mkv",
+        2,
+        &["-vf", "setpts='if(lt(N,10),N/10,1+(N-10)/5)/TB'"],
+    );
     // When ffprobe, decoding every frame, says each frame is shown.
     let out = Command::new("ffprobe")
         .args(["-v", "error", "-select_streams", "v:0", "-show_entries"])
