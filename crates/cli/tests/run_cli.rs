@@ -351,3 +351,50 @@ fn an_unwritable_output_folder_is_exit_2() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("a_file"), "{err}");
 }
+
+/// The fitted face model as the mesh and as the depth: every frame meshed on the model's face
+/// region with its UVs, the fused surface near the tracked landmarks; clip mode on it too.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn the_model_mesh_and_the_model_depth_run() {
+    let (models, clip) = inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let runs: [(&str, &[&str]); 4] = [
+        ("model_model", &["--mesh", "model", "--depth", "model"]),
+        ("model_face", &["--mesh", "model", "--depth", "face"]),
+        ("face_model", &["--mesh", "face", "--depth", "model"]),
+        ("model_clip", &["--mesh", "model", "--mode", "clip"]),
+    ];
+    for (name, extra) in runs {
+        let out = tmp.path().join(name);
+        let mut args = vec![
+            "run",
+            s(&clip),
+            "--out",
+            s(&out),
+            "--max-frames",
+            "5",
+            "--quiet",
+            "--models",
+            s(&models),
+        ];
+        args.extend(extra);
+        run_ok(&args);
+        assert_eq!(ply_count(&out.join("meshes")), 5, "{name}");
+        let m = json(&out.join("metrics.json"));
+        assert_eq!(m["status"], "complete", "{name}");
+        let reprojection = m["summary"]["quality"]["reprojection_px"]["fused"]
+            .as_f64()
+            .unwrap();
+        assert!(reprojection < 4.0, "{name}: {reprojection} px");
+        let mesh = visage_mesh::io::read_ply(&out.join("meshes/000004.ply")).unwrap();
+        if name.starts_with("model") {
+            assert_eq!(mesh.vertices.len(), 9409, "{name}");
+        }
+        assert_eq!(mesh.uvs.len(), mesh.vertices.len(), "{name}: UVs");
+        assert!(mesh.uvs.iter().flatten().all(|c| (0.0..=1.0).contains(c)));
+    }
+}

@@ -9,9 +9,9 @@ use visage_fusion::{
     FaceDomain, FusionSetup, MeshingOptions, DEFAULT_MAX_DEPTH_M, DOMAIN_MAJORITY,
 };
 use visage_mesh::Mask;
-use visage_morphable::{IctModel, ImportOptions};
+use visage_morphable::{FaceModel, IctModel, ImportOptions};
 
-use crate::method::{AnchoredInput, Method, MethodInput, MethodRun, VertexKind};
+use crate::method::{AnchoredInput, Method, MethodInput, MethodRun, ModelInput, VertexKind};
 use crate::metrics::{
     evaluate_sequence, MethodSummary, MetricAccumulator, PerFrame, Scored, VertexSet, VertexTruth,
 };
@@ -61,6 +61,8 @@ pub struct BenchmarkConfig {
     pub weights: Weights,
     /// λ (mm⁴), μ of the face-anchored methods.
     pub anchored_weights: Weights,
+    /// λ (mm⁴ of the model's face), μ of the model fusion.
+    pub model_weights: Weights,
     /// Subdivision factor of the face-anchored mesh (`FaceDomain::subdivide`).
     pub anchored_subdivision: usize,
     /// Noise of the simulated tracker that feeds the face-anchored methods.
@@ -93,6 +95,7 @@ impl BenchmarkConfig {
             seed: 0,
             weights: Weights::default(),
             anchored_weights: ANCHORED_WEIGHTS,
+            model_weights: visage_fusion::MODEL_WEIGHTS_MAP,
             anchored_subdivision: ANCHORED_SUBDIVISION,
             tracker: TrackerNoise::default(),
             meshing: MeshingOptions::default(),
@@ -180,6 +183,11 @@ pub struct FaceAnchoring {
     pub canonical: CanonicalMesh,
     pub correspondence: CanonicalCorrespondence,
     pub domain: FaceDomain,
+    /// The compact model the fit uses ([`benchmark_face_model`]), its face region as a mesh
+    /// and its neutral face (metres).
+    pub face_model: FaceModel,
+    pub model_domain: FaceDomain,
+    pub model_neutral: Vec<[f64; 3]>,
 }
 
 impl FaceAnchoring {
@@ -192,10 +200,21 @@ impl FaceAnchoring {
         let correspondence = CanonicalCorrespondence::new(model, &canonical.vertices)?;
         let domain =
             FaceDomain::subdivide(canonical.vertices.len(), &canonical.triangles, subdivision)?;
+        let face_model = benchmark_face_model(model, &correspondence)?;
+        let model_domain =
+            FaceDomain::subdivide(face_model.vertex_count(), &face_model.triangles, 1)?;
+        let model_neutral = face_model
+            .neutral
+            .iter()
+            .map(|p| p.map(f64::from))
+            .collect();
         Ok(FaceAnchoring {
             canonical,
             correspondence,
             domain,
+            face_model,
+            model_domain,
+            model_neutral,
         })
     }
 }
@@ -331,12 +350,13 @@ impl<'a> PreparedSequence<'a> {
     }
 
     /// The methods' common input: `weights` for the image-plane fusion, `anchored_weights` for
-    /// the face-anchored one.
+    /// the face-anchored one, `model_weights` for the model fusion.
     pub fn input<'b>(
         &'b self,
         config: &'b BenchmarkConfig,
         weights: Weights,
         anchored_weights: Weights,
+        model_weights: Weights,
     ) -> MethodInput<'b> {
         MethodInput {
             k: &self.truth.k,
@@ -355,6 +375,12 @@ impl<'a> PreparedSequence<'a> {
                     template: &a.canonical.vertices,
                     tracking,
                     weights: anchored_weights,
+                    model: Some(ModelInput {
+                        model: &a.face_model,
+                        domain: &a.model_domain,
+                        neutral: &a.model_neutral,
+                        weights: model_weights,
+                    }),
                 }),
         }
     }
@@ -396,6 +422,17 @@ impl<'a> PreparedSequence<'a> {
             boundary: &a.domain.boundary,
             truth,
         });
+        let model_truth = self.anchoring.map(|a| {
+            (
+                a,
+                VertexTruth::model(&self.truth, a.face_model.vertex_count()),
+            )
+        });
+        let model = model_truth.as_ref().map(|(a, truth)| VertexSet {
+            triangles: &a.model_domain.triangles,
+            boundary: &a.model_domain.boundary,
+            truth,
+        });
         let scored = runs
             .iter()
             .map(|r| {
@@ -410,6 +447,15 @@ impl<'a> PreparedSequence<'a> {
                             name: "method",
                             value: "face-anchored".into(),
                             reason: "scored on a sequence prepared without anchoring",
+                        })?,
+                        solutions: &r.solutions,
+                        raw: r.raw.as_deref().unwrap_or(&r.solutions),
+                    },
+                    VertexKind::Model => Scored {
+                        vertices: model.ok_or(EvalError::InvalidConfig {
+                            name: "method",
+                            value: "model".into(),
+                            reason: "scored on a sequence prepared without the face model",
                         })?,
                         solutions: &r.solutions,
                         raw: r.raw.as_deref().unwrap_or(&r.solutions),
@@ -433,7 +479,12 @@ pub fn tune_taubin(model: &IctModel, config: &BenchmarkConfig) -> Result<TaubinT
     let seed = mix_seed(config.seed ^ TUNING_SALT);
     let seq = PreparedSequence::new(model, None, config, seed)?;
     let setup = seq.setup(config)?;
-    let input = seq.input(config, config.weights, config.anchored_weights);
+    let input = seq.input(
+        config,
+        config.weights,
+        config.anchored_weights,
+        config.model_weights,
+    );
     let raw = Method::Raw.run(&input)?;
     let mut rmse_mm = Vec::new();
     for &iterations in &config.taubin_candidates {
@@ -465,7 +516,12 @@ pub fn methods(taubin_iterations: usize, anchored: bool) -> Vec<Method> {
         },
     ];
     if anchored {
-        m.extend([Method::FaceAnchored, Method::FaceAnchoredClip]);
+        m.extend([
+            Method::FaceAnchored,
+            Method::FaceAnchoredClip,
+            Method::ModelOnly,
+            Method::ModelFusion,
+        ]);
     }
     m
 }
@@ -487,9 +543,6 @@ pub fn run_benchmark(
     let methods = methods(taubin_tuning.iterations, anchoring.is_some());
     let mut accumulators = vec![MetricAccumulator::default(); methods.len()];
     let mut sequences = Vec::new();
-    let face_model = anchoring
-        .map(|a| benchmark_face_model(model, &a.correspondence))
-        .transpose()?;
     let mut model_scores = Vec::new();
     for s in 0..config.sequences {
         let seed = sequence_seed(config.seed, s);
@@ -499,16 +552,21 @@ pub fn run_benchmark(
             config.sequences
         ));
         let seq = PreparedSequence::new(model, anchoring, &config, seed)?;
-        if let (Some(face_model), Some(tracking)) = (&face_model, &seq.tracking) {
+        if let (Some(a), Some(tracking)) = (anchoring, &seq.tracking) {
             progress(&format!(
                 "sequence {}/{}: face model fit",
                 s + 1,
                 config.sequences
             ));
-            model_scores.push(model_fit::score(model, face_model, &seq.truth, tracking));
+            model_scores.push(model_fit::score(model, &a.face_model, &seq.truth, tracking));
         }
         let setup = seq.setup(&config)?;
-        let input = seq.input(&config, config.weights, config.anchored_weights);
+        let input = seq.input(
+            &config,
+            config.weights,
+            config.anchored_weights,
+            config.model_weights,
+        );
         let runs: Vec<MethodRun> = methods
             .iter()
             .map(|m| {
@@ -583,11 +641,16 @@ pub fn run_sweep(
         ));
         let seq = PreparedSequence::new(model, anchoring, config, sequence_seed(config.seed, s))?;
         let setup = seq.setup(config)?;
-        let raw = Method::Raw.run(&seq.input(config, config.weights, config.anchored_weights))?;
+        let raw = Method::Raw.run(&seq.input(
+            config,
+            config.weights,
+            config.anchored_weights,
+            config.model_weights,
+        ))?;
         for (li, &lambda) in lambdas.iter().enumerate() {
             for (mi, &mu) in mus.iter().enumerate() {
                 let w = Weights { lambda, mu };
-                let run = method.run(&seq.input(config, w, w))?;
+                let run = method.run(&seq.input(config, w, w, w))?;
                 let a = &mut acc[li * mus.len() + mi];
                 seq.evaluate(&setup, &raw, &[&run], std::slice::from_mut(a))?;
             }

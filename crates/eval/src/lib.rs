@@ -34,7 +34,7 @@ pub use benchmark::{
     TaubinTuning, ANCHORED_SUBDIVISION, ANCHORED_WEIGHTS, QUICK_EXPRESSIONS, TUNING_SALT,
 };
 pub use error::EvalError;
-pub use method::{AnchoredInput, Method, MethodInput, MethodRun, VertexKind};
+pub use method::{AnchoredInput, Method, MethodInput, MethodRun, ModelInput, VertexKind};
 pub use metrics::{
     evaluate_sequence, moving_frames, MethodSummary, MetricAccumulator, PerFrame, Scored,
     VertexSet, VertexTruth,

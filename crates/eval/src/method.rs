@@ -11,10 +11,11 @@ use faer::Mat;
 use visage_camera::{DepthMap, Intrinsics};
 use visage_fem::{solve_clip, ClipOptions, FusionSystem, Weights};
 use visage_fusion::{
-    AnchoredFrame, AnchoredFuser, FaceDomain, FrameDepth, FrameStatus, FusionSetup,
+    AnchoredFrame, AnchoredFuser, ClipState, FaceDomain, FrameDepth, FrameStatus, FusionSetup,
     ImagePlaneFuser, MeshingOptions, SurfaceFuser,
 };
 use visage_mesh::Mask;
+use visage_morphable::{FaceFitter, FaceModel, FitOptions};
 
 use crate::simulated_tracker::TrackedSequence;
 use crate::taubin::taubin_smooth;
@@ -40,6 +41,14 @@ pub enum Method {
     /// Its whole-clip minimiser: [`visage_fem::solve_clip`] on the head-coordinate right-hand
     /// sides of the frames, from the streaming solutions.
     FaceAnchoredClip,
+    /// The morphable model fitted to the tracked landmarks ([`visage_morphable::FaceFitter`]:
+    /// pose, the clip's identity, the frame's expression), placed at the face's scale measured
+    /// from the depth maps — the depth used for nothing else. Landmarks alone cannot see the
+    /// face's size (a larger face further away projects the same).
+    ModelOnly,
+    /// The face-anchored streaming fusion on the model's mesh with each frame's fitted face as
+    /// its template: the depth data, smoothed as deviations from the fitted face.
+    ModelFusion,
 }
 
 /// The vertex set a method's outputs live on.
@@ -49,6 +58,8 @@ pub enum VertexKind {
     ImagePlane,
     /// The face-anchored mesh ([`AnchoredInput::domain`]).
     Anchored,
+    /// The morphable model's face region ([`ModelInput::domain`]).
+    Model,
 }
 
 /// What the face-anchored methods are given on top of the depth.
@@ -61,6 +72,21 @@ pub struct AnchoredInput<'a> {
     /// The simulated tracker's landmarks and poses.
     pub tracking: &'a TrackedSequence,
     /// λ (mm⁴ of the canonical face), μ of the face-anchored fusion.
+    pub weights: Weights,
+    /// What the model methods need (`None`: they cannot run).
+    pub model: Option<ModelInput<'a>>,
+}
+
+/// What the model methods are given.
+#[derive(Clone, Copy, Debug)]
+pub struct ModelInput<'a> {
+    /// The compact model fitted to the landmarks.
+    pub model: &'a FaceModel,
+    /// Its face region as a face-anchored mesh (the model's own triangles).
+    pub domain: &'a FaceDomain,
+    /// Its neutral face (head coordinates, metres): the finite-element domain.
+    pub neutral: &'a [[f64; 3]],
+    /// λ (mm⁴ of the model's face), μ of the model fusion.
     pub weights: Weights,
 }
 
@@ -110,6 +136,8 @@ impl Method {
             Method::Taubin { .. } => "taubin",
             Method::FaceAnchored => "face_anchored",
             Method::FaceAnchoredClip => "face_anchored_clip",
+            Method::ModelOnly => "model_only",
+            Method::ModelFusion => "model_fusion",
         }
     }
 
@@ -142,6 +170,15 @@ impl Method {
             Method::Clip => fused(setup()?, input, input.weights, Some(input.clip)),
             Method::FaceAnchored => face_anchored(input, &anchored()?, None),
             Method::FaceAnchoredClip => face_anchored(input, &anchored()?, Some(input.clip)),
+            Method::ModelOnly | Method::ModelFusion => {
+                let a = anchored()?;
+                let m = a.model.ok_or(EvalError::InvalidConfig {
+                    name: "method",
+                    value: self.name().into(),
+                    reason: "needs the face model",
+                })?;
+                model_run(input, &a, &m, *self == Method::ModelFusion)
+            }
         }
     }
 }
@@ -244,6 +281,7 @@ fn face_anchored(
     let start = Instant::now();
     for (index, depth) in input.frames.iter().enumerate() {
         let r = fuser.process(&AnchoredFrame {
+            template: None,
             landmarks_px: &a.tracking.landmarks_px[index],
             pose: a.tracking.poses[index],
             depth: FrameDepth::Map(depth),
@@ -260,20 +298,83 @@ fn face_anchored(
             let state = fuser.clip_state();
             bs.push(state.b);
             xs.push(state.x);
-            poses.push(state.pose);
+            poses.push((state.pose, state.offset));
             members.push(index);
         }
     }
     if let Some(options) = clip {
         solve_clip(fuser.system_mut(), &bs, &mut xs, options);
-        for ((x, &i), pose) in xs.iter().zip(&members).zip(&poses) {
-            fuser.set_solution_head(x, *pose);
+        for ((x, &i), (pose, offset)) in xs.into_iter().zip(&members).zip(poses) {
+            fuser.load_clip_state(&ClipState {
+                b: Mat::new(),
+                x,
+                pose,
+                offset,
+            });
             solutions[i] = to_mat(fuser.solution());
         }
     }
     Ok(MethodRun {
         solutions,
         vertices: VertexKind::Anchored,
+        raw: Some(raw),
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// The model methods: per frame the model is fitted to the tracked landmarks and its fitted
+/// face — posed, projected, and as the frame's template — drives the anchored fuser on the
+/// model's mesh, which measures the face's scale from the depth map. `fuse`: the fused
+/// surface; otherwise the fitted face at that scale ([`AnchoredFuser::posed_template`]).
+fn model_run(
+    input: &MethodInput<'_>,
+    a: &AnchoredInput<'_>,
+    m: &ModelInput<'_>,
+    fuse: bool,
+) -> Result<MethodRun, EvalError> {
+    let mut fuser = AnchoredFuser::new(
+        m.domain.clone(),
+        m.neutral,
+        *input.k,
+        m.weights,
+        input.max_depth_m,
+    )?;
+    let mut fitter = FaceFitter::new(m.model, FitOptions::default());
+    let n = m.domain.vertex_count();
+    let (mut shape, mut camera, mut pixels) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut solutions, mut raw) = (Vec::new(), Vec::new());
+    let start = Instant::now();
+    for (index, depth) in input.frames.iter().enumerate() {
+        let fit = fitter.fit(input.k, &a.tracking.landmarks_px[index], None);
+        m.model
+            .shape(fitter.identity(), &fit.expression, &mut shape);
+        camera.clear();
+        camera.extend(shape.iter().map(|&p| fit.pose.apply(p)));
+        pixels.clear();
+        pixels.extend(camera.iter().map(|&p| input.k.project(p)));
+        let r = fuser.process(&AnchoredFrame {
+            landmarks_px: &pixels,
+            pose: fit.pose,
+            depth: FrameDepth::Map(depth),
+            template: Some(&shape),
+        })?;
+        if r.status == FrameStatus::NoData {
+            let last = solutions.last().cloned();
+            solutions.push(last.clone().unwrap_or_else(|| Mat::zeros(n, 3)));
+            raw.push(last.unwrap_or_else(|| Mat::zeros(n, 3)));
+            continue;
+        }
+        solutions.push(if fuse {
+            to_mat(fuser.solution())
+        } else {
+            let posed: Vec<[f64; 3]> = fuser.posed_template().collect();
+            to_mat(&posed)
+        });
+        raw.push(to_mat(fuser.raw()));
+    }
+    Ok(MethodRun {
+        solutions,
+        vertices: VertexKind::Model,
         raw: Some(raw),
         seconds: start.elapsed().as_secs_f64(),
     })

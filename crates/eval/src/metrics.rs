@@ -236,6 +236,40 @@ impl VertexTruth {
     }
 }
 
+impl VertexTruth {
+    /// The morphable model's face-region vertices (`0..vertex_count`, ICT-FaceKit order): the
+    /// GT point of vertex i is GT vertex i, and a vertex is in the face set when the GT render
+    /// sees it — its nearest pixel is a face pixel whose depth is within
+    /// [`VISIBLE_TOLERANCE_M`] of the vertex's — as the image-plane vertices count only what
+    /// the camera sees.
+    pub fn model(seq: &SyntheticSequence, vertex_count: usize) -> VertexTruth {
+        let k = &seq.k;
+        let mut face = Vec::with_capacity(seq.frames.len());
+        let mut points = Vec::with_capacity(seq.frames.len());
+        for f in &seq.frames {
+            let vertices = &f.vertices[..vertex_count];
+            face.push(
+                vertices
+                    .iter()
+                    .map(|&p| {
+                        let [u, v] = k.project(p);
+                        let (x, y) = (u.round() as i64, v.round() as i64);
+                        f.face.get(x, y) && {
+                            let z = f.depth.data[y as usize * k.width as usize + x as usize];
+                            (z as f64 - p[2]).abs() <= VISIBLE_TOLERANCE_M
+                        }
+                    })
+                    .collect(),
+            );
+            points.push(vertices.iter().map(|&p| Some(p)).collect());
+        }
+        VertexTruth { face, points }
+    }
+}
+
+/// How far (metres) behind the rendered surface a model vertex may lie and still count as seen.
+pub const VISIBLE_TOLERANCE_M: f64 = 0.005;
+
 /// A method's vertex set: its mesh (for the ERRATA 13 metrics) and its ground truth.
 #[derive(Clone, Copy, Debug)]
 pub struct VertexSet<'a> {

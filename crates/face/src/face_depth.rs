@@ -29,16 +29,26 @@ pub fn render_faces_depth(
 ) -> Result<DepthMap, FaceError> {
     let mut out = DepthMap::empty(k.width, k.height, kind);
     for g in faces {
-        let mesh = face_trimesh(g, canonical);
-        let r =
-            visage_render::render_depth(&mesh, k, None, kind).map_err(|e| FaceError::Render {
-                reason: e.to_string(),
-            })?;
-        for (o, &d) in out.data.iter_mut().zip(&r.depth.data) {
+        let depth = render_surface_depth(&face_trimesh(g, canonical), k, kind)?;
+        for (o, &d) in out.data.iter_mut().zip(&depth.data) {
             if DepthMap::is_valid(d) && (!DepthMap::is_valid(*o) || d < *o) {
                 *o = d;
             }
         }
     }
     Ok(out)
+}
+
+/// Renders the depth of one surface given in camera coordinates (metres; `kind` = z or ray
+/// distance, `0` where it is not seen), e.g. the fitted morphable model.
+pub fn render_surface_depth(
+    mesh: &TriMesh,
+    k: &Intrinsics,
+    kind: DepthKind,
+) -> Result<DepthMap, FaceError> {
+    visage_render::render_depth(mesh, k, None, kind)
+        .map(|r| r.depth)
+        .map_err(|e| FaceError::Render {
+            reason: e.to_string(),
+        })
 }

@@ -57,7 +57,7 @@ pub use canonical_mesh::CanonicalMesh;
 pub use face_geometry::{fit_face_geometry, FaceGeometry, FacePose};
 pub mod face_depth;
 
-pub use face_depth::{face_trimesh, render_faces_depth};
+pub use face_depth::{face_trimesh, render_faces_depth, render_surface_depth};
 pub mod kdtree;
 
 pub use kdtree::KdTree;

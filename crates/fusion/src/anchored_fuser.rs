@@ -24,10 +24,18 @@
 //! ```
 //!
 //! the paper's energy with a data mass `M` (ERRATA's `((1+μ)M + λK) s = …`) and a template
-//! prior: the streaming step solves `((1+μ)M + λK) S̃_k = M X̃_k + λ K C + μ M S̃_{k−1}` with the
-//! matrix factored once per clip, and `S_k = T_k S̃_k`. Only the right-hand side moves with
-//! the head; the clip mode is [`visage_fem::solve_clip`] on the same head-coordinate
-//! right-hand sides.
+//! prior. The solver works on the deviation from the template, `D_k = S̃_k − C`: the streaming
+//! step solves `((1+μ)M + λK) D_k = M (X̃_k − C) + μ M D_{k−1}` with the matrix factored once
+//! per clip, and `S_k = T_k (C + D_k)`. Only the right-hand side moves with the head; the clip
+//! mode is [`visage_fem::solve_clip`] on the same right-hand sides.
+//!
+//! **A template per frame.** When each frame brings its own template `C_k` — the morphable
+//! model fitted to the frame, with this person's identity and the frame's expression — the
+//! prior and the temporal term both act on the deviation from it:
+//! `λ D_kᵀ K D_k + μ ‖D_k − D_{k−1}‖²_M` with `D_k = S̃_k − C_k`. The model's own motion (an
+//! opening mouth, a blink) then passes through without lag; only what the data add to the
+//! model is smoothed over time. The operators stay those of the fixed template the fuser was
+//! built on (the frame's template has the same connectivity and nearly the same metric).
 //!
 //! **Why the template prior** (`S − P` rather than `S` in the smoothness term): on a curved
 //! face, `ΔS` of the face itself is its mean-curvature normal, so `λ‖ΔS‖²` flattens the nose
@@ -42,7 +50,7 @@
 //! depth map measures it: every frame the median ratio of sampled to template ray distances
 //! updates a running scale `s` ([`SCALE_SMOOTHING`]), and the pose used is the fitted one with
 //! its translation times `s` (the template scaled about the camera centre projects exactly as
-//! before) and the template `s·C`.
+//! before) and the template `s·C` (`s·C_k`).
 //!
 //! **Units.** The finite-element domain is the template surface in millimetres (the
 //! canonical FaceMesh is an average adult face), so λ is in mm⁴: smoothing length ≈ λ^{1/4} mm.
@@ -79,6 +87,15 @@ pub const ANCHORED_WEIGHTS_MAP: Weights = Weights {
     mu: 1.0,
 };
 
+/// Default λ (mm⁴ of the model's face) and μ of the fusion on the fitted morphable model's mesh
+/// with depth maps: the best RMSE of the ground-truth benchmark's sweep (λ 10³–10⁵, μ 2–8;
+/// `visage eval synthetic --sweep-method model_fusion`). It is no better than the fitted face
+/// alone there (docs/performance.md): the depth maps' noise is as large as the fit's error.
+pub const MODEL_WEIGHTS_MAP: Weights = Weights {
+    lambda: 1000.0,
+    mu: 2.0,
+};
+
 /// Weight of a frame's scale measurement in the face's running scale (an exponential moving
 /// average; see [`AnchoredFuser::scale`]). The landmark fit's distance drifts with the head's
 /// yaw when the face's shape differs from the template (up to 9 % over 24 frames on the
@@ -108,6 +125,10 @@ pub struct AnchoredFrame<'a> {
     /// Head pose `T_k`: template (head) coordinates → camera coordinates.
     pub pose: RigidTransform,
     pub depth: FrameDepth<'a>,
+    /// This frame's template `C_k` (head coordinates, metres, one point per template vertex),
+    /// e.g. the morphable model fitted to the frame; `None`: the fixed template the fuser was
+    /// built on.
+    pub template: Option<&'a [[f64; 3]]>,
 }
 
 /// Streaming face-anchored fusion: the fixed mesh, its factored system and per-frame buffers
@@ -120,15 +141,20 @@ pub struct AnchoredFuser {
     metrics: SurfaceMetrics,
     /// Template positions at the vertices, head coordinates, metres (`C`).
     rest: Mat<f64>,
-    /// `λ K C`.
-    prior_rhs: Mat<f64>,
+    /// The frame's template at the face's scale, head coordinates (`s C_k`): the solver works
+    /// on the deviation `S̃_k − s C_k`.
+    offset: Mat<f64>,
+    /// Scratch: a frame's template interpolated at the domain vertices.
+    frame_template: Vec<[f64; 3]>,
     pixels: Vec<[f64; 2]>,
     raw: Vec<[f64; 3]>,
     valid: Vec<bool>,
-    /// Data in head coordinates, holes filled (`X̃_k`).
+    /// The data's deviation from the frame's template, head coordinates, holes filled
+    /// (`X̃_k − s C_k`).
     data: Mat<f64>,
     b: Mat<f64>,
-    x_head: Mat<f64>,
+    /// The last solution's deviation from the frame's template, head coordinates (`D_k`).
+    deviation: Mat<f64>,
     solution: Vec<[f64; 3]>,
     pose: RigidTransform,
     /// Face size relative to the template (1 until a depth map measures it).
@@ -173,14 +199,6 @@ impl AnchoredFuser {
             biharmonic: biharmonic(&l, &m_lumped)?,
         };
         let rest = Mat::from_fn(n, 3, |i, c| rest[i][c]);
-        let mut prior_rhs = Mat::zeros(n, 3);
-        visage_fem::sparse::sym_matmul(
-            &ops.biharmonic,
-            rest.as_ref(),
-            weights.lambda,
-            0.0,
-            prior_rhs.as_mut(),
-        );
         let system = FusionSystem::new(ops, weights)?;
         Ok(AnchoredFuser {
             metrics: SurfaceMetrics::new(n, &domain.triangles, &domain.boundary),
@@ -188,14 +206,15 @@ impl AnchoredFuser {
             k,
             max_depth,
             solver: StreamingSolver::new(system),
+            offset: Mat::zeros(n, 3),
+            frame_template: vec![[0.0; 3]; n],
             rest,
-            prior_rhs,
             pixels: vec![[0.0; 2]; n],
             raw: vec![[0.0; 3]; n],
             valid: vec![false; n],
             data: Mat::zeros(n, 3),
             b: Mat::zeros(n, 3),
-            x_head: Mat::zeros(n, 3),
+            deviation: Mat::zeros(n, 3),
             solution: vec![[0.0; 3]; n],
             pose: RigidTransform::IDENTITY,
             scale: 1.0,
@@ -227,12 +246,12 @@ impl AnchoredFuser {
     }
 
     /// Measures the face's scale in this frame — the median over valid vertices of the ratio
-    /// of the depth map's ray distance to the posed template's — and folds it into the running
-    /// average ([`SCALE_SMOOTHING`]).
+    /// of the depth map's ray distance to the posed frame template's — and folds it into the
+    /// running average ([`SCALE_SMOOTHING`]).
     fn update_scale(&mut self, pose: &RigidTransform) {
         self.ratios.clear();
         for i in (0..self.domain.vertex_count()).filter(|&i| self.valid[i]) {
-            let t = pose.apply([self.rest[(i, 0)], self.rest[(i, 1)], self.rest[(i, 2)]]);
+            let t = pose.apply(self.frame_template[i]);
             let norm = |p: [f64; 3]| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
             self.ratios.push(norm(self.raw[i]) / norm(t));
         }
@@ -257,28 +276,28 @@ impl AnchoredFuser {
     }
 
     /// The last frame's head pose at the face's scale (the given pose with its translation
-    /// multiplied by [`AnchoredFuser::scale`]): what [`AnchoredFuser::set_solution_head`]
-    /// expects back.
+    /// multiplied by [`AnchoredFuser::scale`]).
     pub fn pose(&self) -> &RigidTransform {
         &self.pose
     }
 
-    /// The last data right-hand side, head coordinates (`M X̃_k + λ K C`): the clip solver's
-    /// input.
-    pub fn rhs(&self) -> &Mat<f64> {
-        &self.b
-    }
-
-    /// The last solution in head coordinates (`S̃_k`).
-    pub fn solution_head(&self) -> &Mat<f64> {
-        &self.x_head
+    /// The last frame's template posed in the camera at the face's scale (`T_k s C_k`, #V):
+    /// the template alone, e.g. the fitted model with the depth used only for its scale.
+    pub fn posed_template(&self) -> impl ExactSizeIterator<Item = [f64; 3]> + '_ {
+        (0..self.offset.nrows()).map(|i| {
+            self.pose.apply([
+                self.offset[(i, 0)],
+                self.offset[(i, 1)],
+                self.offset[(i, 2)],
+            ])
+        })
     }
 
     /// Fuses one frame.
     ///
     /// # Errors
-    /// When the frame's landmarks or surface do not have one entry per template vertex, or
-    /// the pose is not finite.
+    /// When the frame's landmarks, surface or template do not have one entry per template
+    /// vertex, or the pose is not finite.
     pub fn process(&mut self, frame: &AnchoredFrame<'_>) -> Result<FusedFrame, FusionError> {
         let start = Instant::now();
         let m = self.domain.template_vertex_count;
@@ -295,6 +314,11 @@ impl AnchoredFuser {
                 return Err(wrong("surface", s.len()));
             }
         }
+        if let Some(t) = frame.template {
+            if t.len() != m {
+                return Err(wrong("template", t.len()));
+            }
+        }
         if !frame.pose.is_finite() {
             return Err(FusionError::InvalidOption {
                 name: "pose",
@@ -304,6 +328,14 @@ impl AnchoredFuser {
         }
         self.domain
             .interpolate(frame.landmarks_px, &mut self.pixels);
+        match frame.template {
+            Some(t) => self.domain.interpolate(t, &mut self.frame_template),
+            None => {
+                for (i, p) in self.frame_template.iter_mut().enumerate() {
+                    *p = [self.rest[(i, 0)], self.rest[(i, 1)], self.rest[(i, 2)]];
+                }
+            }
+        }
         let mut valid_count = 0usize;
         for i in 0..self.domain.vertex_count() {
             let sample = match frame.depth {
@@ -332,21 +364,22 @@ impl AnchoredFuser {
             ..frame.pose
         };
         self.pose = pose;
+        let previous = self.solver.previous();
         for i in 0..self.domain.vertex_count() {
-            let head = if self.valid[i] {
-                pose.apply_inverse(self.raw[i])
+            let offset = self.frame_template[i].map(|c| c * self.scale);
+            // A hole keeps the previous deviation from the template (the surface carried by
+            // the head and the template's motion), else the template.
+            let deviation = if self.valid[i] {
+                let head = pose.apply_inverse(self.raw[i]);
+                std::array::from_fn(|c| head[c] - offset[c])
             } else {
-                // A hole: the previous surface where the head is now, else the template.
-                let fill = match self.solver.previous() {
-                    Some(prev) => [prev[(i, 0)], prev[(i, 1)], prev[(i, 2)]],
-                    None => [self.rest[(i, 0)], self.rest[(i, 1)], self.rest[(i, 2)]]
-                        .map(|c| c * self.scale),
-                };
-                self.raw[i] = pose.apply(fill);
-                fill
+                let d = previous.map_or([0.0; 3], |p| [p[(i, 0)], p[(i, 1)], p[(i, 2)]]);
+                self.raw[i] = pose.apply(std::array::from_fn(|c| offset[c] + d[c]));
+                d
             };
-            for (c, value) in head.into_iter().enumerate() {
-                self.data[(i, c)] = value;
+            for c in 0..3 {
+                self.data[(i, c)] = deviation[c];
+                self.offset[(i, c)] = offset[c];
             }
         }
         let n = self.domain.vertex_count();
@@ -359,43 +392,37 @@ impl AnchoredFuser {
                 result.status = FrameStatus::NoData;
                 return Ok(result);
             };
-            self.x_head.copy_from(prev);
+            self.deviation.copy_from(prev);
             self.write_solution();
             result.status = FrameStatus::Carried;
             return Ok(result);
         }
-        for c in 0..3 {
-            for i in 0..n {
-                self.b[(i, c)] = self.scale * self.prior_rhs[(i, c)];
-            }
-        }
         self.solver
             .system()
-            .apply_mass(self.data.as_ref(), 1.0, 1.0, self.b.as_mut());
+            .apply_mass(self.data.as_ref(), 1.0, 0.0, self.b.as_mut());
         result.rhs_seconds = start.elapsed().as_secs_f64();
         let solve = Instant::now();
-        let report = self.solver.step(self.b.as_ref(), self.x_head.as_mut());
+        let report = self.solver.step(self.b.as_ref(), self.deviation.as_mut());
         result.solve_seconds = solve.elapsed().as_secs_f64();
         result.relative_residual = report.relative_residual;
         self.write_solution();
         Ok(result)
     }
 
-    /// Replaces the current solution (head coordinates) — the clip solver's result for the
-    /// frame whose pose is `pose` — and maps it to camera coordinates.
-    pub fn set_solution_head(&mut self, x_head: &Mat<f64>, pose: RigidTransform) {
-        self.x_head.copy_from(x_head);
-        self.pose = pose;
+    /// Makes a clip-solved frame's state (see [`AnchoredFuser::clip_state`]) the current
+    /// solution and maps it to camera coordinates.
+    pub fn load_clip_state(&mut self, state: &ClipState) {
+        self.deviation.copy_from(&state.x);
+        self.offset.copy_from(&state.offset);
+        self.pose = state.pose;
         self.write_solution();
     }
 
     fn write_solution(&mut self) {
         for (i, s) in self.solution.iter_mut().enumerate() {
-            *s = self.pose.apply([
-                self.x_head[(i, 0)],
-                self.x_head[(i, 1)],
-                self.x_head[(i, 2)],
-            ]);
+            *s = self.pose.apply(std::array::from_fn(|c| {
+                self.deviation[(i, c)] + self.offset[(i, c)]
+            }));
         }
     }
 
@@ -453,8 +480,9 @@ impl SurfaceFuser for AnchoredFuser {
     fn clip_state(&self) -> ClipState {
         ClipState {
             b: self.b.clone(),
-            x: self.x_head.clone(),
+            x: self.deviation.clone(),
             pose: self.pose,
+            offset: self.offset.clone(),
         }
     }
 
@@ -462,8 +490,8 @@ impl SurfaceFuser for AnchoredFuser {
         self.solver.system_mut()
     }
 
-    fn load_clip_solution(&mut self, x: &Mat<f64>, pose: RigidTransform, raw: &[[f64; 3]]) {
-        self.set_solution_head(x, pose);
+    fn load_clip_solution(&mut self, state: &ClipState, raw: &[[f64; 3]]) {
+        self.load_clip_state(state);
         self.raw.copy_from_slice(raw);
     }
 }

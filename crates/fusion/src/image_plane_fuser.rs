@@ -155,6 +155,7 @@ impl SurfaceFuser for ImagePlaneFuser {
             b: self.b.clone(),
             x: self.x.clone(),
             pose: RigidTransform::IDENTITY,
+            offset: Mat::zeros(0, 3),
         }
     }
 
@@ -162,8 +163,8 @@ impl SurfaceFuser for ImagePlaneFuser {
         self.solver.system_mut()
     }
 
-    fn load_clip_solution(&mut self, x: &Mat<f64>, _pose: RigidTransform, raw: &[[f64; 3]]) {
-        self.x.copy_from(x);
+    fn load_clip_solution(&mut self, state: &ClipState, raw: &[[f64; 3]]) {
+        self.x.copy_from(&state.x);
         to_positions(self.x.as_ref(), &mut self.solution_points);
         self.raw_points.copy_from_slice(raw);
         for (i, p) in raw.iter().enumerate() {

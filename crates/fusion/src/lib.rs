@@ -24,7 +24,7 @@ mod surface_fusion;
 
 pub use anchored_fuser::{
     AnchoredFrame, AnchoredFuser, FrameDepth, ANCHORED_WEIGHTS_FACE, ANCHORED_WEIGHTS_MAP,
-    DOMAIN_UNITS_PER_METRE, SCALE_SMOOTHING,
+    DOMAIN_UNITS_PER_METRE, MODEL_WEIGHTS_MAP, SCALE_SMOOTHING,
 };
 pub use depth_sequence::{DepthSequence, SequenceSurvey, DOMAIN_MAJORITY};
 pub use error::FusionError;
@@ -35,5 +35,6 @@ pub use image_plane_fuser::{to_positions, ImagePlaneFuser, DEFAULT_MAX_DEPTH_M};
 pub use solver_bench::{bench_solver, SizeReport, SolverBench, VariantReport};
 pub use surface_fuser::{solve_clip_frames, ClipFrame, ClipState, SurfaceFuser};
 pub use surface_fusion::{
-    FaceFrame, FaceTemplate, FusedSurfaces, FusionParams, MeshKind, SurfaceFusion,
+    FaceFrame, FaceTemplate, FusedSurfaces, FusionParams, LandmarkAnchor, MeshKind, ModelFrame,
+    SurfaceFusion,
 };

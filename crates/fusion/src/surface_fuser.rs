@@ -14,6 +14,10 @@ pub struct ClipState {
     pub b: Mat<f64>,
     pub x: Mat<f64>,
     pub pose: RigidTransform,
+    /// Added to `x` before `pose` maps it to the camera: the face-anchored mesh's frame
+    /// template at the face's scale (its solver works on the deviation from it); empty (0 × 3)
+    /// for the image-plane mesh.
+    pub offset: Mat<f64>,
 }
 
 /// Streaming fusion on a fixed mesh, the part both designs share: the fused and the raw
@@ -44,9 +48,9 @@ pub trait SurfaceFuser {
     /// The factored system, for [`visage_fem::solve_clip`].
     fn system_mut(&mut self) -> &mut FusionSystem;
 
-    /// Makes a clip-solved frame the current one: its solution `x` and `pose` (as in its
-    /// [`ClipState`]) and its raw surface.
-    fn load_clip_solution(&mut self, x: &Mat<f64>, pose: RigidTransform, raw: &[[f64; 3]]);
+    /// Makes a clip-solved frame the current one: its [`ClipState`] (the clip solution in
+    /// `x`) and its raw surface.
+    fn load_clip_solution(&mut self, state: &ClipState, raw: &[[f64; 3]]);
 }
 
 /// A frame kept for the whole-clip solve: its [`ClipState`], its raw surface and (video) its

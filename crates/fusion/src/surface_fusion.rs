@@ -1,13 +1,15 @@
-//! The two fusion designs of a video run behind one type: the face-anchored mesh with the
-//! pose-compensated temporal term ([`MeshKind::Face`], [`AnchoredFuser`]) and the paper's
-//! fixed image-plane mesh ([`MeshKind::Image`], [`ImagePlaneFuser`] on a domain fixed by the
-//! first frame with a face, see [`crate::image_domain`]).
+//! The fusion designs of a video run behind one type: the face-anchored mesh with the
+//! pose-compensated temporal term on MediaPipe's canonical face ([`MeshKind::Face`],
+//! [`AnchoredFuser`]) or on the fitted morphable model's face ([`MeshKind::Model`], the same
+//! fuser with the frame's fitted face as its template), and the paper's fixed image-plane mesh
+//! ([`MeshKind::Image`], [`ImagePlaneFuser`] on a domain fixed by the first frame with a face,
+//! see [`crate::image_domain`]).
 //!
-//! Both give, per frame, the fused and the raw surface on their mesh (camera coordinates,
+//! All give, per frame, the fused and the raw surface on their mesh (camera coordinates,
 //! metres) and both surfaces at the 468 landmarks — face mesh: vertices `0..468` (domain
-//! vertex `i < 468` is landmark `i`); image mesh: each landmark pixel located in the planar
-//! mesh and the surface interpolated barycentrically — so the designs are compared on the same
-//! points.
+//! vertex `i < 468` is landmark `i`); model mesh: the landmarks' points on the model
+//! ([`LandmarkAnchor`]); image mesh: each landmark pixel located in the planar mesh and the
+//! surface interpolated barycentrically — so the designs are compared on the same points.
 
 use faer::Mat;
 use serde::Serialize;
@@ -31,6 +33,9 @@ pub enum MeshKind {
     Face,
     /// The paper's fixed image-plane mesh.
     Image,
+    /// Face-anchored on the morphable model's face region, each frame's fitted face as the
+    /// template (this person's identity and the frame's expression).
+    Model,
 }
 
 /// Fusion parameters of a video run.
@@ -47,12 +52,41 @@ pub struct FusionParams {
     pub max_depth_m: f64,
 }
 
-/// The face template the face-anchored mesh is built on: the canonical FaceMesh's vertices
-/// (head coordinates, metres; vertex `i` is landmark `i`) and triangles.
+/// The face template a face-anchored mesh is built on: the canonical FaceMesh's vertices
+/// (head coordinates, metres; vertex `i` is landmark `i`) and triangles, or the morphable
+/// model's neutral face with where the landmarks lie on it.
 #[derive(Clone, Copy, Debug)]
 pub struct FaceTemplate<'a> {
     pub vertices: &'a [[f64; 3]],
     pub triangles: &'a [[u32; 3]],
+    /// Where each of the 468 landmarks lies on the template; `None`: vertex `i` is landmark
+    /// `i`.
+    pub landmarks: Option<&'a [LandmarkAnchor]>,
+    /// Texture coordinates per template vertex (empty: none).
+    pub uvs: &'a [[f64; 2]],
+}
+
+/// A landmark's point on a template: `Σ_j bary[j] · vertex[triangle[j]] + offset` (offset in
+/// head coordinates, metres).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LandmarkAnchor {
+    pub triangle: [u32; 3],
+    pub bary: [f64; 3],
+    pub offset: [f64; 3],
+}
+
+/// The morphable model fitted to a frame: what the model mesh fuses on, and the model depth.
+#[derive(Clone, Copy, Debug)]
+pub struct ModelFrame<'a> {
+    /// Model (head) coordinates → camera.
+    pub pose: RigidTransform,
+    /// The fitted face (identity and expression), head coordinates, metres, one point per
+    /// model vertex.
+    pub shape: &'a [[f64; 3]],
+    /// The same in camera coordinates.
+    pub camera: &'a [[f64; 3]],
+    /// Their projections, pixels.
+    pub pixels: &'a [[f64; 2]],
 }
 
 /// One frame's input to the fusion: the tracked face and its depth.
@@ -68,6 +102,8 @@ pub struct FaceFrame<'a> {
     /// The rendered face depth (its mask) and face box `[x, y, w, h]` (pixels), needed by the
     /// image mesh's first frame.
     pub face_mask: Option<(&'a DepthMap, [f32; 4])>,
+    /// The morphable model fitted to the frame (needed by the model mesh).
+    pub model: Option<ModelFrame<'a>>,
 }
 
 /// What fusing a frame gave: the fuser's record and the raw and fused surfaces' quality.
@@ -85,6 +121,8 @@ struct ImagePlane {
 
 enum Design {
     Face(Box<AnchoredFuser>),
+    /// The anchored fuser on the model, and where the landmarks lie on it.
+    Model(Box<AnchoredFuser>, Vec<LandmarkAnchor>),
     /// Built on the first frame with a face.
     Image(Option<Box<ImagePlane>>),
 }
@@ -94,6 +132,8 @@ pub struct SurfaceFusion {
     design: Design,
     params: FusionParams,
     k: Intrinsics,
+    /// Texture coordinates per mesh vertex (empty: none).
+    uvs: Vec<[f64; 2]>,
 }
 
 /// Quality figures of a frame without a surface.
@@ -124,15 +164,61 @@ impl SurfaceFusion {
                     params.max_depth_m,
                 )?))
             }
+            MeshKind::Model => {
+                let landmarks = template.landmarks.ok_or(FusionError::MissingInput {
+                    what: "the model mesh needs the landmarks' places on the model",
+                })?;
+                let domain = FaceDomain::subdivide(template.vertices.len(), template.triangles, 1)?;
+                Design::Model(
+                    Box::new(AnchoredFuser::new(
+                        domain,
+                        template.vertices,
+                        k,
+                        params.weights,
+                        params.max_depth_m,
+                    )?),
+                    landmarks.to_vec(),
+                )
+            }
             MeshKind::Image => Design::Image(None),
         };
-        Ok(SurfaceFusion { design, params, k })
+        let uvs = match &design {
+            Design::Face(f) | Design::Model(f, _)
+                if template.uvs.len() == template.vertices.len() =>
+            {
+                f.domain()
+                    .anchors
+                    .iter()
+                    .map(|a| {
+                        let t = f.domain().template_triangles[a.triangle as usize];
+                        std::array::from_fn(|c| {
+                            (0..3)
+                                .map(|j| a.bary[j] * template.uvs[t[j] as usize][c])
+                                .sum()
+                        })
+                    })
+                    .collect()
+            }
+            _ => Vec::new(),
+        };
+        Ok(SurfaceFusion {
+            design,
+            params,
+            k,
+            uvs,
+        })
+    }
+
+    /// Texture coordinates per mesh vertex, interpolated from the template's (empty for the
+    /// image-plane mesh, or a template without them).
+    pub fn uvs(&self) -> &[[f64; 2]] {
+        &self.uvs
     }
 
     /// The built fuser, if any (the image mesh has none before its first face).
     fn fuser(&self) -> Option<&dyn SurfaceFuser> {
         match &self.design {
-            Design::Face(f) => Some(f.as_ref()),
+            Design::Face(f) | Design::Model(f, _) => Some(f.as_ref()),
             Design::Image(Some(p)) => Some(&p.fuser),
             Design::Image(None) => None,
         }
@@ -140,7 +226,7 @@ impl SurfaceFusion {
 
     fn fuser_mut(&mut self) -> Option<&mut dyn SurfaceFuser> {
         match &mut self.design {
-            Design::Face(f) => Some(f.as_mut()),
+            Design::Face(f) | Design::Model(f, _) => Some(f.as_mut()),
             Design::Image(Some(p)) => Some(&mut p.fuser),
             Design::Image(None) => None,
         }
@@ -209,6 +295,22 @@ impl SurfaceFusion {
                     landmarks_px: frame.landmarks_px,
                     pose: frame.pose,
                     depth,
+                    template: None,
+                })?
+            }
+            Design::Model(f, _) => {
+                let model = frame.model.ok_or(FusionError::MissingInput {
+                    what: "the model mesh needs the model fitted to every frame",
+                })?;
+                let depth = match frame.depth_map {
+                    Some(map) => FrameDepth::Map(map),
+                    None => FrameDepth::Surface(model.camera),
+                };
+                f.process(&AnchoredFrame {
+                    landmarks_px: model.pixels,
+                    pose: model.pose,
+                    depth,
+                    template: Some(model.shape),
                 })?
             }
             Design::Image(Some(p)) => {
@@ -245,6 +347,22 @@ impl SurfaceFusion {
                 fused.extend_from_slice(&f.solution()[..landmarks_px.len()]);
                 raw.extend_from_slice(&f.raw()[..landmarks_px.len()]);
             }
+            Design::Model(f, landmarks) => {
+                let pose = f.pose();
+                for a in landmarks {
+                    let offset = pose.rotate(a.offset.map(|c| c * f.scale()));
+                    let at = |s: &[[f64; 3]]| -> [f64; 3] {
+                        std::array::from_fn(|c| {
+                            (0..3)
+                                .map(|j| a.bary[j] * s[a.triangle[j] as usize][c])
+                                .sum::<f64>()
+                                + offset[c]
+                        })
+                    };
+                    fused.push(at(f.solution()));
+                    raw.push(at(f.raw()));
+                }
+            }
             Design::Image(Some(p)) => {
                 let missing = [f64::NAN; 3];
                 for &px in landmarks_px {
@@ -265,6 +383,7 @@ impl SurfaceFusion {
                 b: Mat::zeros(0, 3),
                 x: Mat::zeros(0, 3),
                 pose: RigidTransform::IDENTITY,
+                offset: Mat::zeros(0, 3),
             },
         };
         ClipFrame {
@@ -292,7 +411,7 @@ impl SurfaceFusion {
     pub fn load_clip_frame(&mut self, frame: &ClipFrame) -> (SurfaceQuality, SurfaceQuality) {
         match self.fuser_mut() {
             Some(f) => {
-                f.load_clip_solution(&frame.state.x, frame.state.pose, &frame.raw);
+                f.load_clip_solution(&frame.state, &frame.raw);
                 f.frame_quality()
             }
             None => (NO_SURFACE, NO_SURFACE),

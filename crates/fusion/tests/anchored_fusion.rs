@@ -4,7 +4,7 @@
 #[path = "common/face_scene.rs"]
 mod face_scene;
 
-use face_scene::{camera, expression, fuser, observe, pose, template};
+use face_scene::{camera, expression, fuser, observe, pose, template, HALF};
 use faer::Mat;
 use visage_camera::{DepthKind, DepthMap};
 use visage_fem::sparse::sym_matmul;
@@ -71,6 +71,7 @@ fn a_moving_head_with_a_held_expression_does_not_lag() {
         let (surface, px) = observe(&face, &p);
         let r = f
             .process(&AnchoredFrame {
+                template: None,
                 landmarks_px: &px,
                 pose: p,
                 depth: FrameDepth::Surface(&surface),
@@ -78,11 +79,9 @@ fn a_moving_head_with_a_held_expression_does_not_lag() {
             .unwrap();
         assert_eq!(r.status, FrameStatus::Solved);
         assert!(r.relative_residual < 1e-10);
-        let head = f.solution_head().clone();
+        let head: Vec<[f64; 3]> = f.solution().iter().map(|&x| p.apply_inverse(x)).collect();
         let first = first_head.get_or_insert_with(|| head.clone());
-        let expected: Vec<[f64; 3]> = (0..head.nrows())
-            .map(|i| p.apply([first[(i, 0)], first[(i, 1)], first[(i, 2)]]))
-            .collect();
+        let expected: Vec<[f64; 3]> = first.iter().map(|&x| p.apply(x)).collect();
         let d = max_distance(f.solution(), &expected);
         assert!(
             d < 1e-9,
@@ -111,6 +110,7 @@ fn pose_compensation_is_what_removes_the_lag() {
             (&mut fixed, still, &mut lag_fixed),
         ] {
             f.process(&AnchoredFrame {
+                template: None,
                 landmarks_px: &px,
                 pose: pose_given,
                 depth: FrameDepth::Surface(&surface),
@@ -144,6 +144,7 @@ fn noise_is_reduced_on_a_moving_head() {
             .map(|q| q.map(|c| c + 0.002 * (rng.random::<f64>() - 0.5) * 3.46))
             .collect();
         f.process(&AnchoredFrame {
+            template: None,
             landmarks_px: &px,
             pose: p,
             depth: FrameDepth::Surface(&noisy),
@@ -201,6 +202,7 @@ fn holes_follow_the_head() {
         let depth = plane_depth(&p, |x, _| k >= 3 && x < 320);
         let r = f
             .process(&AnchoredFrame {
+                template: None,
                 landmarks_px: &px,
                 pose: p,
                 depth: FrameDepth::Map(&depth),
@@ -221,6 +223,7 @@ fn holes_follow_the_head() {
     let empty = DepthMap::empty(640, 480, DepthKind::Z);
     let r = f
         .process(&AnchoredFrame {
+            template: None,
             landmarks_px: &px,
             pose: p,
             depth: FrameDepth::Map(&empty),
@@ -233,6 +236,7 @@ fn holes_follow_the_head() {
     let mut fresh = fuser(&v, &t, 1, 10.0, 0.5);
     let r = fresh
         .process(&AnchoredFrame {
+            template: None,
             landmarks_px: &px,
             pose: p,
             depth: FrameDepth::Map(&empty),
@@ -251,6 +255,7 @@ fn surface_samples_are_perspective_correct() {
     let p = pose(0.5, 0.04);
     let (surface, px) = observe(&face, &p);
     f.process(&AnchoredFrame {
+        template: None,
         landmarks_px: &px,
         pose: p,
         depth: FrameDepth::Surface(&surface),
@@ -285,6 +290,7 @@ fn malformed_frames_are_refused() {
     let short = &px[..10];
     let err = f
         .process(&AnchoredFrame {
+            template: None,
             landmarks_px: short,
             pose: p,
             depth: FrameDepth::Surface(&surface),
@@ -295,6 +301,7 @@ fn malformed_frames_are_refused() {
     bad.translation[0] = f64::NAN;
     assert!(f
         .process(&AnchoredFrame {
+            template: None,
             landmarks_px: &px,
             pose: bad,
             depth: FrameDepth::Surface(&surface),
@@ -326,6 +333,7 @@ fn the_face_scale_is_measured_from_depth_maps() {
         fitted.translation = p.translation.map(|c| c / 1.1);
         let depth = plane_depth(&p, |_, _| false);
         f.process(&AnchoredFrame {
+            template: None,
             landmarks_px: &px,
             pose: fitted,
             depth: FrameDepth::Map(&depth),
@@ -336,4 +344,62 @@ fn the_face_scale_is_measured_from_depth_maps() {
         let d = max_distance(f.solution(), &truth);
         assert!(d < 2e-4, "frame {k}: {d} m");
     }
+}
+
+/// With the frame's template given (a fitted model's face), an expression that changes from
+/// frame to frame passes through without lag however large μ is: only the deviation from the
+/// template is smoothed over time. With the fixed template the same motion lags.
+#[test]
+fn a_per_frame_template_passes_its_motion_without_lag() {
+    let (v, t) = template(true);
+    let mut with_template = fuser(&v, &t, 1, 10.0, 12.5);
+    let mut fixed = fuser(&v, &t, 1, 10.0, 12.5);
+    let (mut lag_template, mut lag_fixed) = (0.0f64, 0.0f64);
+    for k in 0..15 {
+        // A bump that grows by 1 mm a frame while the head turns.
+        let depth = 0.001 * k as f64;
+        let face: Vec<[f64; 3]> = v
+            .iter()
+            .map(|&p| {
+                let r2 = (p[0] * p[0] + p[1] * p[1]) / (HALF * HALF);
+                [p[0], p[1], p[2] - depth * (-2.0 * r2).exp()]
+            })
+            .collect();
+        let p = pose(0.02 * k as f64, 0.0);
+        let (surface, px) = observe(&face, &p);
+        for (f, template, lag) in [
+            (&mut with_template, Some(face.as_slice()), &mut lag_template),
+            (&mut fixed, None, &mut lag_fixed),
+        ] {
+            f.process(&AnchoredFrame {
+                landmarks_px: &px,
+                pose: p,
+                depth: FrameDepth::Surface(&surface),
+                template,
+            })
+            .unwrap();
+            *lag = lag.max(max_distance(f.solution(), &surface));
+        }
+        // The template alone, posed, is the data here.
+        let posed: Vec<[f64; 3]> = with_template.posed_template().collect();
+        assert!(max_distance(&posed, &surface) < 1e-12);
+    }
+    assert!(lag_template < 1e-9, "{lag_template}");
+    assert!(lag_fixed > 1e-3, "fixed template: {lag_fixed}");
+}
+
+/// A frame template with the wrong number of points is refused.
+#[test]
+fn a_template_of_the_wrong_size_is_refused() {
+    let (v, t) = template(true);
+    let mut f = fuser(&v, &t, 1, 10.0, 0.5);
+    let (surface, px) = observe(&v, &pose(0.0, 0.0));
+    let short = &v[..v.len() - 1];
+    let r = f.process(&AnchoredFrame {
+        landmarks_px: &px,
+        pose: pose(0.0, 0.0),
+        depth: FrameDepth::Surface(&surface),
+        template: Some(short),
+    });
+    assert!(r.is_err());
 }

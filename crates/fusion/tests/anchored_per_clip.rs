@@ -34,6 +34,7 @@ fn one_factorisation_per_clip_and_no_allocation_per_frame() {
         let start = allocations();
         let r = f
             .process(&AnchoredFrame {
+                template: None,
                 landmarks_px: px,
                 pose: *p,
                 depth: FrameDepth::Surface(surface),

@@ -8,7 +8,7 @@ use visage_camera::{Intrinsics, DEFAULT_FOV_DEG};
 use visage_fem::{ClipOptions, Weights};
 use visage_fusion::{
     DepthSequence, FusionParams, MeshKind, MeshingOptions, ANCHORED_WEIGHTS_FACE,
-    ANCHORED_WEIGHTS_MAP, DEFAULT_MAX_DEPTH_M,
+    ANCHORED_WEIGHTS_MAP, DEFAULT_MAX_DEPTH_M, MODEL_WEIGHTS_MAP,
 };
 
 use visage_morphable::{FaceModel, FitOptions};
@@ -40,6 +40,9 @@ pub enum DepthSource {
     /// A folder of 16-bit PNG z-depth maps in millimetres, the i-th file for input frame i
     /// (an RGB-D sensor, a depth network's output).
     Folder(DepthSequence),
+    /// The morphable model fitted to the frame: this person's face with the frame's
+    /// expression (needs the model fit).
+    Model,
 }
 
 impl DepthSource {
@@ -47,6 +50,7 @@ impl DepthSource {
     pub fn describe(&self) -> String {
         match self {
             DepthSource::Face => "face".into(),
+            DepthSource::Model => "model".into(),
             DepthSource::Folder(seq) => seq.dir.display().to_string(),
         }
     }
@@ -230,9 +234,12 @@ impl Builder {
     /// The weights: the ones given, the rest the defaults of the mesh and depth source.
     pub(crate) fn weights(&self) -> Result<Weights, Error> {
         let defaults = match (self.mesh, &self.depth) {
-            (MeshKind::Face, DepthSource::Face) => ANCHORED_WEIGHTS_FACE,
-            (MeshKind::Face, DepthSource::Folder(_)) => ANCHORED_WEIGHTS_MAP,
             (MeshKind::Image, _) => Weights::default(),
+            (MeshKind::Face, DepthSource::Folder(_)) => ANCHORED_WEIGHTS_MAP,
+            (MeshKind::Model, DepthSource::Folder(_)) => MODEL_WEIGHTS_MAP,
+            (MeshKind::Face | MeshKind::Model, DepthSource::Face | DepthSource::Model) => {
+                ANCHORED_WEIGHTS_FACE
+            }
         };
         let weights = Weights {
             lambda: self.lambda.unwrap_or(defaults.lambda),

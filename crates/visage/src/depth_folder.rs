@@ -201,8 +201,7 @@ impl DepthRun<'_> {
         let share = clip_ms / frames.len().max(1) as f64;
         for (&position, frame) in positions.iter().zip(&frames) {
             let start = Instant::now();
-            self.fuser
-                .load_clip_solution(&frame.state.x, frame.state.pose, &frame.raw);
+            self.fuser.load_clip_solution(&frame.state, &frame.raw);
             let (raw_q, fused_q) = self.fuser.frame_quality();
             let m = &mut self.recorder.frames[position];
             m.quality = FrameQuality::of(&raw_q, &fused_q);
@@ -257,6 +256,7 @@ impl DepthRun<'_> {
         s.raw.extend_from_slice(self.fuser.raw());
         self.recorder.measure(position, &self.k, s);
         self.out.mesh(&MeshFrame {
+            uvs: &[],
             index: self.recorder.frames[position].index,
             triangles: self.fuser.triangles(),
             surfaces: s,

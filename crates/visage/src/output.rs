@@ -173,6 +173,9 @@ impl FrameSink for OutputDir {
         if self.mesh.triangles != frame.triangles {
             self.mesh.triangles = frame.triangles.to_vec();
         }
+        if self.mesh.uvs != frame.uvs {
+            self.mesh.uvs = frame.uvs.to_vec();
+        }
         for (sub, vertices, wanted) in targets {
             if !wanted {
                 continue;

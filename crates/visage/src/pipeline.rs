@@ -97,6 +97,7 @@ pub(crate) fn run_stages(
         k,
         recorder,
         triangles,
+        uvs: fuse.fusion.uvs().to_vec(),
         sink,
     };
     let (errors, sink_error) = std::thread::scope(|scope| {
@@ -253,6 +254,8 @@ struct Consumer<'a> {
     k: Intrinsics,
     recorder: &'a mut Recorder,
     triangles: &'a mut Vec<[u32; 3]>,
+    /// Texture coordinates per vertex (empty: none).
+    uvs: Vec<[f64; 2]>,
     sink: &'a mut dyn FrameSink,
 }
 
@@ -319,6 +322,7 @@ impl Consumer<'_> {
         self.sink.mesh(&MeshFrame {
             index: self.recorder.frames[position].index,
             triangles: self.triangles,
+            uvs: &self.uvs,
             surfaces: s,
         })
     }

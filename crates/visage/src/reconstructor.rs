@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use visage_camera::Intrinsics;
 use visage_face::{model_files, CanonicalMesh, FaceMesh, FaceTracker};
-use visage_fusion::{FaceTemplate, SurfaceFusion};
+use visage_fusion::{FaceTemplate, LandmarkAnchor, MeshKind, SurfaceFusion};
 use visage_mesh::TriMesh;
 use visage_morphable::{CanonicalCorrespondence, FaceFitter, FaceModel, IctModel};
 use visage_video::Frame;
@@ -14,12 +14,13 @@ use visage_video::Frame;
 use crate::animation::{BlendshapeFrame, IctToArkit};
 use crate::config::{Builder, ModelSource, Parameters};
 use crate::landmarks::LandmarksFrame;
+use crate::lid_gate::LidGate;
 use crate::metrics::{FrameMetrics, MeshSummary, Report, RunStatus, RunSummary, RunTiming};
 use crate::pipeline::{run_stages, Stages};
 use crate::recorder::Recorder;
 use crate::rest_pose::RestPose;
 use crate::stages::{FaceStage, FuseStage, ModelStage, Surfaces};
-use crate::{Error, FrameSink, Input, TemporalMode};
+use crate::{DepthSource, Error, FrameSink, Input, TemporalMode};
 
 /// The video pipeline: face tracking, landmarks and the metric face fit, depth, and fusion into
 /// a temporally stable metric surface on a fixed mesh. Set up once ([`Reconstructor::builder`]:
@@ -161,6 +162,15 @@ impl Reconstructor {
     ) -> Result<Reconstructor, Error> {
         let start = Instant::now();
         let params = builder.fusion_params()?;
+        let uses_model =
+            params.mesh == MeshKind::Model || matches!(builder.depth, DepthSource::Model);
+        if uses_model && matches!(builder.model, ModelSource::None) {
+            return Err(Error::InvalidOption {
+                name: "--mesh/--depth",
+                value: "model".into(),
+                reason: "the model mesh and the model depth need the face model fit",
+            });
+        }
         let models = builder
             .models
             .clone()
@@ -170,17 +180,7 @@ impl Reconstructor {
         // The eyes run in the model stage (its own thread in `run`), not in the tracker.
         let iris = mesh.iris.take().map(|net| [net.clone(), net]);
         let tracker = FaceTracker::new(mesh);
-        let template = FaceTemplate {
-            vertices: &canonical.vertices,
-            triangles: &canonical.triangles,
-        };
-        let fusion = SurfaceFusion::new(params, template, k)?;
-        let parameters = Parameters {
-            fusion: params,
-            mode: builder.mode,
-            depth: builder.depth.describe(),
-            model: builder.model.describe(),
-        };
+        let model_name = builder.model.describe();
         let model = match builder.model {
             ModelSource::Embedded => Some(FaceModel::embedded()),
             ModelSource::IctFolder(dir) => {
@@ -192,6 +192,47 @@ impl Reconstructor {
             ModelSource::None => None,
         }
         .map(Arc::new);
+        let fusion = match (&model, params.mesh) {
+            (Some(m), MeshKind::Model) => {
+                let vertices: Vec<[f64; 3]> = m.neutral.iter().map(|p| p.map(f64::from)).collect();
+                let uvs: Vec<[f64; 2]> = m.uvs.iter().map(|t| t.map(f64::from)).collect();
+                let landmarks: Vec<LandmarkAnchor> = m
+                    .landmarks
+                    .iter()
+                    .zip(&m.landmark_offsets)
+                    .map(|(p, o)| LandmarkAnchor {
+                        triangle: p.triangle,
+                        bary: p.bary,
+                        offset: o.map(f64::from),
+                    })
+                    .collect();
+                let template = FaceTemplate {
+                    vertices: &vertices,
+                    triangles: &m.triangles,
+                    landmarks: Some(&landmarks),
+                    uvs: &uvs,
+                };
+                SurfaceFusion::new(params, template, k)?
+            }
+            _ => {
+                let template = FaceTemplate {
+                    vertices: &canonical.vertices,
+                    triangles: &canonical.triangles,
+                    landmarks: None,
+                    uvs: &canonical.uvs,
+                };
+                SurfaceFusion::new(params, template, k)?
+            }
+        };
+        let parameters = Parameters {
+            fusion: params,
+            mode: builder.mode,
+            depth: builder.depth.describe(),
+            model: model_name,
+        };
+        let model_triangles = model
+            .as_ref()
+            .map_or_else(Vec::new, |m| m.triangles.clone());
         let model_stage = model.as_ref().map(|m| ModelStage {
             k,
             fitter: FaceFitter::new(m, builder.fit),
@@ -199,11 +240,14 @@ impl Reconstructor {
             iris,
             rest: builder.rest_pose.then(|| RestPose::new(m)),
             weights: Vec::with_capacity(m.expressions.len()),
+            surface: uses_model.then(|| Arc::clone(m)),
+            lids: LidGate::default(),
         });
         let mut mesh = TriMesh::new(Vec::new(), Vec::new());
         if let Some(t) = fusion.triangles() {
             mesh.triangles = t.to_vec();
         }
+        mesh.uvs = fusion.uvs().to_vec();
         Ok(Reconstructor {
             face: FaceStage {
                 k,
@@ -218,6 +262,7 @@ impl Reconstructor {
                 canonical,
                 depth: builder.depth,
                 fusion,
+                model_triangles,
             },
             mode: builder.mode,
             clip: builder.clip,

@@ -17,62 +17,20 @@
 //!   optical axis (the angle kappa between the visual and the pupillary axis, ~5°) are not
 //!   known per person, and in face capture the eyes rest on the camera.
 //!
-//! Quantiles come from per-shape histograms of [`BINS`] bins over [0, 1] (lid heights over
+//! Quantiles come from per-shape histograms of [`crate::histogram::BINS`] bins over [0, 1] (lid heights over
 //! their own range), so memory does not grow with the clip.
 
 use visage_morphable::fit::LandmarkBasis;
 use visage_morphable::FaceModel;
 
 use crate::gaze::EyeGaze;
+use crate::histogram::Histogram;
 
 /// The quantile of a one-sided shape's weights taken as its rest value.
 pub const REST_QUANTILE: f64 = 0.1;
 
-/// Histogram bins per shape.
-pub const BINS: usize = 200;
-
 /// FaceMesh's upper-lid centre landmarks: the subject's right eye, then the left.
 const UPPER_LID: [usize; 2] = [159, 386];
-
-/// A streaming quantile over a fixed range.
-#[derive(Clone, Debug)]
-struct Histogram {
-    lo: f64,
-    hi: f64,
-    counts: Vec<u32>,
-    total: u32,
-}
-
-impl Histogram {
-    fn new(lo: f64, hi: f64) -> Histogram {
-        Histogram {
-            lo,
-            hi,
-            counts: vec![0; BINS],
-            total: 0,
-        }
-    }
-
-    fn push(&mut self, v: f64) {
-        let t = ((v - self.lo) / (self.hi - self.lo)).clamp(0.0, 1.0);
-        let bin = ((t * BINS as f64) as usize).min(BINS - 1);
-        self.counts[bin] += 1;
-        self.total += 1;
-    }
-
-    /// The value below which a fraction `q` of the samples lie (bin centre).
-    fn quantile(&self, q: f64) -> f64 {
-        let target = (q * self.total as f64).ceil().max(1.0) as u32;
-        let mut seen = 0;
-        for (bin, &c) in self.counts.iter().enumerate() {
-            seen += c;
-            if seen >= target {
-                return self.lo + (bin as f64 + 0.5) / BINS as f64 * (self.hi - self.lo);
-            }
-        }
-        self.hi
-    }
-}
 
 /// One eye's lid axis: the expression indices and how far they move the upper lid (metres
 /// per unit weight, positive).

@@ -13,6 +13,8 @@ pub struct MeshFrame<'a> {
     pub index: usize,
     /// The mesh's triangles (fixed for the run).
     pub triangles: &'a [[u32; 3]],
+    /// Texture coordinates per vertex (empty: the mesh has none).
+    pub uvs: &'a [[f64; 2]],
     pub surfaces: &'a Surfaces,
 }
 

@@ -7,20 +7,24 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use image::RgbImage;
+use visage_camera::RigidTransform;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_face::{
-    fit_face_geometry, render_faces_depth, CanonicalMesh, Eye, Eyes, FaceGeometry, FaceTracker,
-    IrisLandmarker,
+    fit_face_geometry, render_faces_depth, render_surface_depth, CanonicalMesh, Eye, Eyes,
+    FaceGeometry, FaceTracker, IrisLandmarker,
 };
-use visage_fusion::{ClipFrame, FaceFrame, FusedSurfaces, MeshKind, SurfaceFusion};
+use visage_fusion::{ClipFrame, FaceFrame, FusedSurfaces, MeshKind, ModelFrame, SurfaceFusion};
+use visage_mesh::TriMesh;
 use visage_morphable::fit::rigid_pose::mat3_mul;
 use visage_morphable::fit::FRONTAL;
 use visage_morphable::FaceFitter;
+use visage_morphable::FaceModel;
 use visage_video::Frame;
 
 use crate::animation::{live_link_angles, BlendshapeFrame, IctToArkit, ARKIT_BLENDSHAPES};
-use crate::gaze::{eye_gaze, eye_look_weights};
+use crate::gaze::{eye_gaze, eye_look_weights, EyeGaze};
 use crate::landmarks::{FaceRecord, LandmarksFrame};
+use crate::lid_gate::LidGate;
 use crate::metrics::{FrameMetrics, FrameQuality, FrameStatus, PoseMetrics};
 use crate::rest_pose::RestPose;
 use crate::{DepthSource, Error};
@@ -46,6 +50,30 @@ pub(crate) struct Tracked {
     pub warning: Option<String>,
     /// The morphable-model fit's blendshape record (when the model is fitted and a face was).
     pub blendshapes: Option<BlendshapeFrame>,
+    /// The fitted model's surface, when the model mesh or the model depth needs it.
+    pub model: Option<FittedModel>,
+}
+
+/// The morphable model fitted to a frame, as a surface.
+pub(crate) struct FittedModel {
+    /// Model frame → camera.
+    pub pose: RigidTransform,
+    /// The fitted face (identity and the frame's expression), model frame, metres.
+    pub shape: Vec<[f64; 3]>,
+    /// The same in camera coordinates, and projected (pixels).
+    pub camera: Vec<[f64; 3]>,
+    pub pixels: Vec<[f64; 2]>,
+}
+
+impl FittedModel {
+    fn frame(&self) -> ModelFrame<'_> {
+        ModelFrame {
+            pose: self.pose,
+            shape: &self.shape,
+            camera: &self.camera,
+            pixels: &self.pixels,
+        }
+    }
 }
 
 /// The morphable-model fit and the eyes: the fitter, the mapping of its expressions to ARKit's
@@ -60,6 +88,10 @@ pub(crate) struct ModelStage {
     pub rest: Option<RestPose>,
     /// Scratch: the calibrated weights.
     pub weights: Vec<f64>,
+    /// The model, when its fitted surface is needed downstream (the model mesh or depth).
+    pub surface: Option<Arc<FaceModel>>,
+    /// Holds each eye's gaze while its lid covers the iris.
+    pub lids: LidGate<EyeGaze>,
 }
 
 impl ModelStage {
@@ -69,6 +101,7 @@ impl ModelStage {
         let start = Instant::now();
         let Some(face) = &tracked.face else {
             self.fitter.lose_track();
+            self.lids.lose_track();
             return Ok(());
         };
         let rotation = mat3_mul(&face.geometry.pose.rotation, &FRONTAL);
@@ -98,16 +131,25 @@ impl ModelStage {
                 (&eyes.right, [33, 133], false),
                 (&eyes.left, [362, 263], true),
             ] {
-                let c = eye.iris_center();
-                let corners = corners.map(|i| points[i]);
-                let Some(mut gaze) =
-                    eye_gaze(&self.k, &fit.pose, corners, [c[0] as f64, c[1] as f64])
-                else {
+                let gaze = if self.lids.is_open(left, &face.landmarks_px) {
+                    let c = eye.iris_center();
+                    let corners = corners.map(|i| points[i]);
+                    let gaze = eye_gaze(&self.k, &fit.pose, corners, [c[0] as f64, c[1] as f64])
+                        .map(|g| match &mut self.rest {
+                            Some(rest) => rest.calibrate_gaze(left, g),
+                            None => g,
+                        });
+                    if let Some(g) = gaze {
+                        self.lids.keep(left, g);
+                    }
+                    gaze
+                } else {
+                    // The lid covers the iris: the last gaze of the open eye.
+                    self.lids.held(left)
+                };
+                let Some(gaze) = gaze else {
                     continue;
                 };
-                if let Some(rest) = &mut self.rest {
-                    gaze = rest.calibrate_gaze(left, gaze);
-                }
                 let side = if left { "Left" } else { "Right" };
                 let look = eye_look_weights(gaze, left);
                 for (name, w) in ["Up", "Down", "In", "Out"].iter().zip(look) {
@@ -126,6 +168,18 @@ impl ModelStage {
             }
         }
         metrics.model_fit_px = Some(fit.mean_error_px);
+        if let Some(model) = &self.surface {
+            let mut shape = Vec::with_capacity(model.vertex_count());
+            model.shape(self.fitter.identity(), &fit.expression, &mut shape);
+            let camera: Vec<[f64; 3]> = shape.iter().map(|&p| fit.pose.apply(p)).collect();
+            let pixels = camera.iter().map(|&p| self.k.project(p)).collect();
+            tracked.model = Some(FittedModel {
+                pose: fit.pose,
+                shape,
+                camera,
+                pixels,
+            });
+        }
         metrics.ms.fit += start.elapsed().as_secs_f64() * 1e3;
         tracked.blendshapes = Some(b);
         Ok(())
@@ -207,6 +261,7 @@ impl FaceStage {
             },
             warning,
             blendshapes: None,
+            model: None,
         })
     }
 }
@@ -233,6 +288,8 @@ pub(crate) struct FuseStage {
     pub canonical: Arc<CanonicalMesh>,
     pub depth: DepthSource,
     pub fusion: SurfaceFusion,
+    /// The fitted model's triangles, to render its depth for the other meshes.
+    pub model_triangles: Vec<[u32; 3]>,
 }
 
 impl FuseStage {
@@ -247,15 +304,33 @@ impl FuseStage {
         metrics.pose = Some(PoseMetrics::of(&face.geometry.pose));
         metrics.fit_rms_px = Some(face.geometry.rms_px);
         let start = Instant::now();
-        let folder_map = match &self.depth {
-            DepthSource::Folder(seq) => Some(
+        let given_map = match (&self.depth, self.fusion.mesh(), &tracked.model) {
+            (DepthSource::Folder(seq), _, _) => Some(
                 read_depth(seq, metrics.index, &self.k)
                     .map_err(|e| Error::on_frame(&metrics.source, "depth", e))?,
             ),
-            DepthSource::Face => None,
+            // The model mesh samples the fitted surface at its own vertices.
+            (DepthSource::Model, MeshKind::Face | MeshKind::Image, Some(model)) => {
+                let mesh = TriMesh::new(model.camera.clone(), self.model_triangles.clone());
+                Some(
+                    render_surface_depth(&mesh, &self.k, DepthKind::Z)
+                        .map_err(|e| Error::on_frame(&metrics.source, "model depth", e))?,
+                )
+            }
+            // The model mesh samples the face fit's surface as a depth map.
+            (DepthSource::Face, MeshKind::Model, _) => Some(
+                render_faces_depth(
+                    std::slice::from_ref(&face.geometry),
+                    &self.canonical,
+                    &self.k,
+                    DepthKind::Z,
+                )
+                .map_err(|e| Error::on_frame(&metrics.source, "face depth", e))?,
+            ),
+            _ => None,
         };
         let needs_render = self.fusion.needs_face_mask()
-            || (self.fusion.mesh() == MeshKind::Image && folder_map.is_none());
+            || (self.fusion.mesh() == MeshKind::Image && given_map.is_none());
         let rendered = if needs_render {
             Some(
                 render_faces_depth(
@@ -270,10 +345,10 @@ impl FuseStage {
             None
         };
         metrics.ms.depth = start.elapsed().as_secs_f64() * 1e3;
-        let depth_map = match (&folder_map, self.fusion.mesh()) {
+        let depth_map = match (&given_map, self.fusion.mesh()) {
             (Some(map), _) => Some(map),
             (None, MeshKind::Image) => rendered.as_ref(),
-            (None, MeshKind::Face) => None,
+            (None, MeshKind::Face | MeshKind::Model) => None,
         };
         let start = Instant::now();
         let FusedSurfaces {
@@ -288,6 +363,7 @@ impl FuseStage {
                 metric_landmarks: &face.geometry.metric_landmarks,
                 depth_map,
                 face_mask: rendered.as_ref().map(|r| (r, face.face_box)),
+                model: tracked.model.as_ref().map(FittedModel::frame),
             })
             .map_err(|e| Error::on_frame(&metrics.source, "fusion", e))?;
         metrics.ms.fuse = start.elapsed().as_secs_f64() * 1e3;

@@ -3,8 +3,8 @@
 //! refused before any work, naming what is wrong.
 
 use visage::{
-    Camera, Error, FrameSink, Input, Intrinsics, LandmarksFrame, MeshFrame, Reconstructor,
-    TemporalMode,
+    Camera, DepthSource, Error, FrameSink, Input, Intrinsics, LandmarksFrame, MeshFrame, MeshKind,
+    ModelSource, Reconstructor, TemporalMode,
 };
 
 fn clip() -> std::path::PathBuf {
@@ -138,6 +138,19 @@ fn bad_options_are_refused_before_any_work() {
     assert!(e.to_string().contains("--fov-deg 200"), "{e}");
     let e = no_models().lambda(-1.0).build_for(&input).err().unwrap();
     assert!(e.to_string().contains("lambda"), "{e}");
+    for (mesh, depth) in [
+        (MeshKind::Model, DepthSource::Face),
+        (MeshKind::Face, DepthSource::Model),
+    ] {
+        let e = no_models()
+            .mesh(mesh)
+            .depth(depth)
+            .model(ModelSource::None)
+            .build_for(&input)
+            .err()
+            .unwrap();
+        assert!(e.to_string().contains("face model fit"), "{e}");
+    }
     // Then the missing models are named.
     let e = no_models().build_for(&input).err().unwrap();
     assert!(e.to_string().contains("no-models"), "{e}");

@@ -148,7 +148,8 @@ fn sweep_method(name: &str) -> anyhow::Result<Method> {
     match name {
         "streaming" => Ok(Method::Streaming),
         "face_anchored" => Ok(Method::FaceAnchored),
-        _ => bail!("--sweep-method {name:?}: expected streaming or face_anchored"),
+        "model_fusion" => Ok(Method::ModelFusion),
+        _ => bail!("--sweep-method {name:?}: expected streaming, face_anchored or model_fusion"),
     }
 }
 
@@ -171,8 +172,11 @@ fn synthetic(args: SyntheticArgs) -> anyhow::Result<()> {
             None
         }
     };
-    if method == Method::FaceAnchored && anchoring.is_none() && !args.sweep_lambda.is_empty() {
-        bail!("--sweep-method face_anchored needs the model files (--models)");
+    if method != Method::Streaming && anchoring.is_none() && !args.sweep_lambda.is_empty() {
+        bail!(
+            "--sweep-method {} needs the model files (--models)",
+            method.name()
+        );
     }
     let mut progress = |line: &str| eprintln!("{line}");
     let results = run_benchmark(&model, anchoring.as_ref(), &config, &mut progress)?;

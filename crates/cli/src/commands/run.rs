@@ -27,6 +27,8 @@ pub enum MeshArg {
     Face,
     /// The paper's fixed image-plane mesh (domain: first face, dilated).
     Image,
+    /// The fitted face model's mesh (this person's face; UVs).
+    Model,
 }
 
 /// Temporal model.
@@ -50,15 +52,18 @@ pub struct PipelineArgs {
     /// 35 mm-equivalent focal length in an image input's EXIF if present, else 60°.
     #[arg(long)]
     pub fov_deg: Option<f64>,
-    /// Depth source: `face` (the metric face fit's surface) or a folder of 16-bit PNG depth
-    /// maps (millimetres, z), the i-th file for input frame i.
+    /// Depth source: `face` (the metric face fit's surface), `model` (the fitted face
+    /// model's surface) or a folder of 16-bit PNG depth maps (millimetres, z), the i-th
+    /// file for input frame i.
     #[arg(long, default_value = "face")]
     pub depth: String,
-    /// Smoothness weight λ (face mesh: mm⁴ of the canonical face, default 1 with the face
-    /// depth and 10 with depth maps; image mesh: reference pixels⁴, default 10).
+    /// Smoothness weight λ (face and model meshes: mm⁴ of the template face, default 1
+    /// with the face or model depth, with depth maps 10 on the face mesh and 10³ on the
+    /// model mesh; image mesh: reference pixels⁴, default 10).
     #[arg(long, allow_hyphen_values = true)]
     pub lambda: Option<f64>,
-    /// Temporal weight μ (dimensionless; default 0.5, face mesh with depth maps 1).
+    /// Temporal weight μ (dimensionless; default 0.5; with depth maps 1 on the face
+    /// mesh, 2 on the model mesh).
     #[arg(long, allow_hyphen_values = true)]
     pub mu: Option<f64>,
     /// Mesh design.
@@ -146,6 +151,7 @@ impl PipelineArgs {
         };
         let depth = match self.depth.as_str() {
             "face" => DepthSource::Face,
+            "model" => DepthSource::Model,
             dir => DepthSource::Folder(
                 DepthSequence::open(dir.as_ref(), 1000.0, DepthKind::Z)
                     .context("cannot use --depth")?,
@@ -157,6 +163,7 @@ impl PipelineArgs {
             .mesh(match self.mesh {
                 MeshArg::Face => MeshKind::Face,
                 MeshArg::Image => MeshKind::Image,
+                MeshArg::Model => MeshKind::Model,
             })
             .mode(match self.mode {
                 ModeArg::Streaming => TemporalMode::Streaming,
