@@ -117,7 +117,18 @@ fn fusion_beats_raw_and_taubin_on_the_quick_setting() {
         streaming.lag_frames
     );
     assert!(m["face_anchored_clip"].jitter_mm < m["clip"].jitter_mm);
-    // The face-model fit from the tracker's landmarks alone (measured 0.027 and 0.57 mm).
+    // The fitted model (measured: RMSE 1.95 mm, jitter 2.14) and the model mesh's fusion
+    // (1.98, 2.47): below raw's error (2.30), and the model the steadiest streaming method
+    // (face-anchored 3.27). Whether fusing the depth maps on the model helps is not asserted:
+    // on the full run it does not (docs/performance.md).
+    let (only, fused) = (&m["model_only"], &m["model_fusion"]);
+    assert!(only.rmse_mm < raw.rmse_mm && fused.rmse_mm < raw.rmse_mm);
+    assert!(
+        only.jitter_mm < anchored.jitter_mm,
+        "{only:?} vs {anchored:?}"
+    );
+    assert_eq!((only.lag_frames, fused.lag_frames), (0.0, 0.0));
+    // The face-model fit from the tracker's landmarks alone (measured 0.025 and 0.57 mm).
     let fit = results
         .model_fit
         .expect("the face-model fit runs with the anchoring")

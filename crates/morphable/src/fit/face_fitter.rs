@@ -85,7 +85,7 @@ impl Default for FitOptions {
         FitOptions {
             landmark_noise_crop_px: 1.0,
             identity_prior: 1.0,
-            expression_prior: 0.3,
+            expression_prior: 0.5,
             outline_weight: 1.0,
             rigid_motion_m: 0.004,
             gaze_from_landmarks: false,
