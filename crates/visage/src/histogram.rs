@@ -30,6 +30,11 @@ impl Histogram {
         self.total += 1;
     }
 
+    /// Samples so far.
+    pub(crate) fn total(&self) -> u32 {
+        self.total
+    }
+
     /// The value below which a fraction `q` of the samples lie (bin centre).
     pub(crate) fn quantile(&self, q: f64) -> f64 {
         let target = (q * self.total as f64).ceil().max(1.0) as u32;

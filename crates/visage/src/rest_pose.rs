@@ -13,6 +13,12 @@
 //!   mm per unit weight) rests at its median; below rest is a blink (`−Δh / b`), above a wide
 //!   eye (`Δh / a`). Without this, a blink of a wide-resting eye only lowers `eyeWide`.
 //!
+//! - the shapes that close the lips (`mouthPress`, `mouthClose`, `mouthShrug`, `mouthRoll`)
+//!   rest at their median over the frames whose lips are closed ([`lips_closed`]) once there
+//!   are [`MIN_CLOSED_FRAMES`] of them: ICT-FaceKit's neutral face holds the inner lips 4.5 mm
+//!   apart, so a relaxed closed mouth needs about 0.7 of `mouthPress` — and a talking face's
+//!   lips are apart more often than not, so the 10th percentile of those shapes is 0 and a
+//!   closed mouth read as pressed lips;
 //! - gaze is relative to its median per eye: the eyeball model's centre and the eye's own
 //!   optical axis (the angle kappa between the visual and the pupillary axis, ~5°) are not
 //!   known per person, and in face capture the eyes rest on the camera.
@@ -32,6 +38,30 @@ pub const REST_QUANTILE: f64 = 0.1;
 /// FaceMesh's upper-lid centre landmarks: the subject's right eye, then the left.
 const UPPER_LID: [usize; 2] = [159, 386];
 
+/// Frames with closed lips needed before the lip-closing shapes rest at their median over them.
+pub const MIN_CLOSED_FRAMES: u32 = 5;
+
+/// The lips are closed when the inner lips' gap is below this fraction of the distance between
+/// the eyes' outer corners (about 1.8 mm on an adult face).
+pub const CLOSED_LIP_GAP: f64 = 0.02;
+
+/// Expression name prefixes of the shapes that close the lips.
+const LIP_CLOSING: [&str; 4] = ["mouthPress", "mouthClose", "mouthShrug", "mouthRoll"];
+
+/// Whether the tracked landmarks (468, pixels) show closed lips: the gap between the inner
+/// lips' centres (13, 14) under [`CLOSED_LIP_GAP`] of the eye corners' distance (33, 263).
+pub fn lips_closed(landmarks_px: &[[f64; 2]]) -> bool {
+    if landmarks_px.len() < 468 {
+        return false;
+    }
+    let d = |i: usize, j: usize| {
+        let (p, q) = (landmarks_px[i], landmarks_px[j]);
+        (p[0] - q[0]).hypot(p[1] - q[1])
+    };
+    let eyes = d(33, 263);
+    eyes > 0.0 && d(13, 14) < CLOSED_LIP_GAP * eyes
+}
+
 /// One eye's lid axis: the expression indices and how far they move the upper lid (metres
 /// per unit weight, positive).
 #[derive(Clone, Copy, Debug)]
@@ -46,6 +76,8 @@ struct Lid {
 #[derive(Clone, Debug)]
 pub struct RestPose {
     shapes: Vec<Histogram>,
+    /// Per expression: for the lip-closing shapes, their weights in closed-lip frames.
+    closed_lips: Vec<Option<Histogram>>,
     lids: Vec<(Lid, Histogram)>,
     /// Per eye (the subject's right, then left): yaw and pitch.
     gaze: [[Histogram; 2]; 2],
@@ -82,6 +114,16 @@ impl RestPose {
             shapes: (0..model.expressions.len())
                 .map(|_| Histogram::new(0.0, 1.0))
                 .collect(),
+            closed_lips: model
+                .expression_names
+                .iter()
+                .map(|name| {
+                    LIP_CLOSING
+                        .iter()
+                        .any(|p| name.starts_with(p))
+                        .then(|| Histogram::new(0.0, 1.0))
+                })
+                .collect(),
             lids,
             gaze: std::array::from_fn(|_| {
                 std::array::from_fn(|_| Histogram::new(-GAZE_RANGE, GAZE_RANGE))
@@ -101,17 +143,31 @@ impl RestPose {
         }
     }
 
-    /// Adds a frame's raw weights to the estimate and rewrites them relative to the rest pose.
-    pub fn calibrate(&mut self, weights: &mut [f64]) {
+    /// Adds a frame's raw weights to the estimate and rewrites them relative to the rest pose;
+    /// `lips_closed`: whether the frame's lips are closed ([`lips_closed`]).
+    pub fn calibrate(&mut self, weights: &mut [f64], lips_closed: bool) {
         let mut lid_values = Vec::with_capacity(self.lids.len());
         for (lid, hist) in &mut self.lids {
             let h = lid.up * weights[lid.wide] - lid.down * weights[lid.blink];
             hist.push(h);
             lid_values.push((*lid, h - hist.quantile(0.5)));
         }
-        for (w, hist) in weights.iter_mut().zip(&mut self.shapes) {
+        for ((w, hist), closed) in weights
+            .iter_mut()
+            .zip(&mut self.shapes)
+            .zip(&mut self.closed_lips)
+        {
             hist.push(*w);
-            let rest = hist.quantile(REST_QUANTILE).min(0.99);
+            let mut rest = hist.quantile(REST_QUANTILE);
+            if let Some(closed) = closed {
+                if lips_closed {
+                    closed.push(*w);
+                }
+                if closed.total() >= MIN_CLOSED_FRAMES {
+                    rest = closed.quantile(0.5);
+                }
+            }
+            let rest = rest.min(0.99);
             *w = ((*w - rest) / (1.0 - rest)).clamp(0.0, 1.0);
         }
         for (lid, delta) in lid_values {
@@ -145,18 +201,57 @@ mod tests {
         };
         for i in 0..100 {
             let mut w = frame(0.8, 0.0, 0.2 + 0.5 * ((i % 10) as f64 / 10.0));
-            rest.calibrate(&mut w);
+            rest.calibrate(&mut w, false);
         }
         let mut at_rest = frame(0.8, 0.0, 0.2);
-        rest.calibrate(&mut at_rest);
+        rest.calibrate(&mut at_rest, false);
         assert!(at_rest.iter().all(|&w| w < 0.02), "{at_rest:?}");
         // The lid drops: eyeWide falls to 0 and eyeBlink rises a little.
         let mut blink_frame = frame(0.0, 0.2, 0.2);
-        rest.calibrate(&mut blink_frame);
+        rest.calibrate(&mut blink_frame, false);
         assert!(blink_frame[blink] > 0.4, "{}", blink_frame[blink]);
         assert_eq!(blink_frame[wide], 0.0);
         let mut open = frame(0.8, 0.0, 0.7);
-        rest.calibrate(&mut open);
+        rest.calibrate(&mut open, false);
         assert!(open[jaw] > 0.55, "{}", open[jaw]);
+    }
+
+    /// A face whose closed lips need 0.7 of mouthPress on the model, talking with its lips
+    /// apart 70 % of the time: its closed mouth reads 0, pressing harder still shows.
+    #[test]
+    fn a_closed_mouth_is_not_read_as_pressed_lips() {
+        let model = FaceModel::embedded();
+        let mut rest = RestPose::new(&model);
+        let press = model.expression_index("mouthPress_L").unwrap();
+        let n = model.expressions.len();
+        let frame = |w: f64| {
+            let mut v = vec![0.0; n];
+            v[press] = w;
+            v
+        };
+        for i in 0..100 {
+            let closed = i % 10 < 3;
+            let mut w = frame(if closed { 0.7 } else { 0.0 });
+            rest.calibrate(&mut w, closed);
+        }
+        let mut at_rest = frame(0.7);
+        rest.calibrate(&mut at_rest, true);
+        assert!(at_rest[press] < 0.02, "{}", at_rest[press]);
+        let mut pressed = frame(0.95);
+        rest.calibrate(&mut pressed, true);
+        assert!(pressed[press] > 0.5, "{}", pressed[press]);
+    }
+
+    #[test]
+    fn closed_lips_are_told_from_open_ones() {
+        let mut l = vec![[0.0; 2]; 468];
+        l[33] = [100.0, 100.0];
+        l[263] = [190.0, 100.0];
+        l[13] = [145.0, 150.0];
+        l[14] = [145.0, 151.0];
+        assert!(lips_closed(&l));
+        l[14] = [145.0, 160.0];
+        assert!(!lips_closed(&l));
+        assert!(!lips_closed(&l[..100]));
     }
 }

@@ -26,7 +26,7 @@ use crate::gaze::{eye_gaze, eye_look_weights, EyeGaze};
 use crate::landmarks::{FaceRecord, LandmarksFrame};
 use crate::lid_gate::LidGate;
 use crate::metrics::{FrameMetrics, FrameQuality, FrameStatus, PoseMetrics};
-use crate::rest_pose::RestPose;
+use crate::rest_pose::{lips_closed, RestPose};
 use crate::{DepthSource, Error};
 
 /// A face found and fitted in a frame.
@@ -111,7 +111,7 @@ impl ModelStage {
         self.weights.clear();
         self.weights.extend_from_slice(&fit.expression);
         if let Some(rest) = &mut self.rest {
-            rest.calibrate(&mut self.weights);
+            rest.calibrate(&mut self.weights, lips_closed(&face.landmarks_px));
         }
         b.weights = self.to_arkit.weights(&self.weights);
         b.head = live_link_angles(&mat3_mul(&FRONTAL, &fit.pose.rotation));
