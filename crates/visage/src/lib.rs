@@ -88,7 +88,7 @@ pub use output::{OutputDir, DEFAULT_TIMECODE_FPS};
 pub use pipeline::QUEUE_CAPACITY;
 pub use quality::{FusedAndRaw, QualitySummary};
 pub use reconstructor::{error_chain, FrameResult, Identity, Reconstructor, RunOutcome};
-pub use rest_pose::RestPose;
+pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP};
 pub use rigid_jitter::rigid_residual_rms;
 pub use sink::{FrameSink, MeshFrame};
 pub use stages::Surfaces;
