@@ -28,6 +28,23 @@ fn json(path: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
+/// `visage run` on the first 5 frames of `clip` into `out`, with `extra` options.
+fn run_five_frames(clip: &Path, models: &Path, out: &Path, extra: &[&str]) {
+    let mut args = vec![
+        "run",
+        s(clip),
+        "--out",
+        s(out),
+        "--max-frames",
+        "5",
+        "--quiet",
+        "--models",
+        s(models),
+    ];
+    args.extend(extra);
+    run_ok(&args);
+}
+
 fn ply_count(dir: &Path) -> usize {
     std::fs::read_dir(dir).map_or(0, |d| {
         d.filter(|e| {
@@ -140,19 +157,7 @@ fn image_mesh_and_clip_mode_run() {
     let tmp = tempfile::tempdir().unwrap();
     for (name, extra) in [("image", ["--mesh", "image"]), ("clip", ["--mode", "clip"])] {
         let out = tmp.path().join(name);
-        let mut args = vec![
-            "run",
-            s(&clip),
-            "--out",
-            s(&out),
-            "--max-frames",
-            "5",
-            "--quiet",
-            "--models",
-            s(&models),
-        ];
-        args.extend(extra);
-        run_ok(&args);
+        run_five_frames(&clip, &models, &out, &extra);
         assert_eq!(ply_count(&out.join("meshes")), 5, "{name}");
         let m = json(&out.join("metrics.json"));
         assert_eq!(m["status"], "complete", "{name}");
@@ -370,19 +375,7 @@ fn the_model_mesh_and_the_model_depth_run() {
     ];
     for (name, extra) in runs {
         let out = tmp.path().join(name);
-        let mut args = vec![
-            "run",
-            s(&clip),
-            "--out",
-            s(&out),
-            "--max-frames",
-            "5",
-            "--quiet",
-            "--models",
-            s(&models),
-        ];
-        args.extend(extra);
-        run_ok(&args);
+        run_five_frames(&clip, &models, &out, extra);
         assert_eq!(ply_count(&out.join("meshes")), 5, "{name}");
         let m = json(&out.join("metrics.json"));
         assert_eq!(m["status"], "complete", "{name}");

@@ -254,6 +254,14 @@ fn fused(
     })
 }
 
+/// A frame without data: the previous output repeated as solution and raw surface (zeros at
+/// the start).
+fn repeat_last(solutions: &mut Vec<Mat<f64>>, raw: &mut Vec<Mat<f64>>, n: usize) {
+    let last = solutions.last().cloned();
+    solutions.push(last.clone().unwrap_or_else(|| Mat::zeros(n, 3)));
+    raw.push(last.unwrap_or_else(|| Mat::zeros(n, 3)));
+}
+
 fn to_mat(points: &[[f64; 3]]) -> Mat<f64> {
     Mat::from_fn(points.len(), 3, |i, c| points[i][c])
 }
@@ -287,9 +295,7 @@ fn face_anchored(
             depth: FrameDepth::Map(depth),
         })?;
         if r.status == FrameStatus::NoData {
-            let last = solutions.last().cloned();
-            solutions.push(last.clone().unwrap_or_else(|| Mat::zeros(n, 3)));
-            raw.push(last.unwrap_or_else(|| Mat::zeros(n, 3)));
+            repeat_last(&mut solutions, &mut raw, n);
             continue;
         }
         solutions.push(to_mat(fuser.solution()));
@@ -359,9 +365,7 @@ fn model_run(
             template: Some(&shape),
         })?;
         if r.status == FrameStatus::NoData {
-            let last = solutions.last().cloned();
-            solutions.push(last.clone().unwrap_or_else(|| Mat::zeros(n, 3)));
-            raw.push(last.unwrap_or_else(|| Mat::zeros(n, 3)));
+            repeat_last(&mut solutions, &mut raw, n);
             continue;
         }
         solutions.push(if fuse {

@@ -230,9 +230,12 @@ impl Reconstructor {
             depth: builder.depth.describe(),
             model: model_name,
         };
-        let model_triangles = model
-            .as_ref()
-            .map_or_else(Vec::new, |m| m.triangles.clone());
+        let model_mesh = TriMesh::new(
+            Vec::new(),
+            model
+                .as_ref()
+                .map_or_else(Vec::new, |m| m.triangles.clone()),
+        );
         let model_stage = model.as_ref().map(|m| ModelStage {
             k,
             fitter: FaceFitter::new(m, builder.fit),
@@ -262,7 +265,7 @@ impl Reconstructor {
                 canonical,
                 depth: builder.depth,
                 fusion,
-                model_triangles,
+                model_mesh,
             },
             mode: builder.mode,
             clip: builder.clip,

@@ -288,8 +288,9 @@ pub(crate) struct FuseStage {
     pub canonical: Arc<CanonicalMesh>,
     pub depth: DepthSource,
     pub fusion: SurfaceFusion,
-    /// The fitted model's triangles, to render its depth for the other meshes.
-    pub model_triangles: Vec<[u32; 3]>,
+    /// The fitted model's mesh (its vertices rewritten per frame), to render its depth for the
+    /// other meshes.
+    pub model_mesh: TriMesh,
 }
 
 impl FuseStage {
@@ -311,27 +312,23 @@ impl FuseStage {
             ),
             // The model mesh samples the fitted surface at its own vertices.
             (DepthSource::Model, MeshKind::Face | MeshKind::Image, Some(model)) => {
-                let mesh = TriMesh::new(model.camera.clone(), self.model_triangles.clone());
+                self.model_mesh.vertices.clone_from(&model.camera);
                 Some(
-                    render_surface_depth(&mesh, &self.k, DepthKind::Z)
+                    render_surface_depth(&self.model_mesh, &self.k, DepthKind::Z)
                         .map_err(|e| Error::on_frame(&metrics.source, "model depth", e))?,
                 )
             }
-            // The model mesh samples the face fit's surface as a depth map.
-            (DepthSource::Face, MeshKind::Model, _) => Some(
-                render_faces_depth(
-                    std::slice::from_ref(&face.geometry),
-                    &self.canonical,
-                    &self.k,
-                    DepthKind::Z,
-                )
-                .map_err(|e| Error::on_frame(&metrics.source, "face depth", e))?,
-            ),
             _ => None,
         };
-        let needs_render = self.fusion.needs_face_mask()
-            || (self.fusion.mesh() == MeshKind::Image && given_map.is_none());
-        let rendered = if needs_render {
+        // The face fit's surface as a depth map: the image mesh's (and its first frame's mask),
+        // and the model mesh's with the face depth.
+        let face_depth_as_map = given_map.is_none()
+            && match self.fusion.mesh() {
+                MeshKind::Image => true,
+                MeshKind::Model => matches!(self.depth, DepthSource::Face),
+                MeshKind::Face => false,
+            };
+        let rendered = if face_depth_as_map || self.fusion.needs_face_mask() {
             Some(
                 render_faces_depth(
                     std::slice::from_ref(&face.geometry),
@@ -345,11 +342,9 @@ impl FuseStage {
             None
         };
         metrics.ms.depth = start.elapsed().as_secs_f64() * 1e3;
-        let depth_map = match (&given_map, self.fusion.mesh()) {
-            (Some(map), _) => Some(map),
-            (None, MeshKind::Image) => rendered.as_ref(),
-            (None, MeshKind::Face | MeshKind::Model) => None,
-        };
+        let depth_map = given_map
+            .as_ref()
+            .or(rendered.as_ref().filter(|_| face_depth_as_map));
         let start = Instant::now();
         let FusedSurfaces {
             frame,
