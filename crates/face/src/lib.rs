@@ -61,3 +61,6 @@ pub use face_depth::{face_trimesh, render_faces_depth, render_surface_depth};
 pub mod kdtree;
 
 pub use kdtree::KdTree;
+mod regions;
+
+pub use regions::FaceRegion;
