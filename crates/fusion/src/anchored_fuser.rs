@@ -72,11 +72,13 @@ pub const DOMAIN_UNITS_PER_METRE: f64 = 1000.0;
 
 /// Default λ (mm⁴) and μ of the face-anchored fusion on the face CNN's surface. That surface is
 /// already smooth (planar over each FaceMesh triangle), so λ only pulls the landmarks towards
-/// the template; μ trades jitter against lag. On the two real clips λ = 1, μ = 0.5 keep the
-/// landmarks within 0.41 px of the tracked ones (`visage bench`, ARCHITECTURE.md).
+/// the template, and it flattens the lips' edges most (at λ = 1 the inner lips sit 0.7 px from
+/// the tracked ones against 0.09 px for the face); the temporal smoothing is the landmark
+/// smoother's, before the fit, so μ = 0 here (μ = 0.5 on top of it adds lag to the mouth for
+/// a little less jitter; docs/performance.md, "Temporal stability").
 pub const ANCHORED_WEIGHTS_FACE: Weights = Weights {
-    lambda: 1.0,
-    mu: 0.5,
+    lambda: 0.1,
+    mu: 0.0,
 };
 
 /// Default λ (mm⁴) and μ of the face-anchored fusion on depth maps (a sensor, a depth network):

@@ -13,6 +13,7 @@ use visage_fusion::{
 
 use visage_morphable::{FaceModel, FitOptions};
 
+use crate::landmark_smoothing::{DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES};
 use crate::{Error, Input};
 
 /// Default subdivision of the FaceMesh template for the face mesh (≈ 1.8k vertices).
@@ -103,6 +104,10 @@ pub struct Parameters {
     pub depth: String,
     /// The morphable model fitted: `"embedded"`, an ICT-FaceKit folder, or `"none"`.
     pub model: String,
+    /// The landmark smoother's acceleration-to-noise ratio (1/s²); `null`: off.
+    pub landmark_smoothing: Option<f64>,
+    /// Frames the landmark smoother waits for before giving a frame out.
+    pub latency_frames: usize,
 }
 
 /// Sets up a [`crate::Reconstructor`]. Every option has a default: the face mesh on the face
@@ -123,6 +128,8 @@ pub struct Builder {
     pub(crate) model: ModelSource,
     pub(crate) fit: FitOptions,
     pub(crate) rest_pose: bool,
+    pub(crate) landmark_smoothing: Option<f64>,
+    pub(crate) latency: usize,
 }
 
 impl Default for Builder {
@@ -141,6 +148,8 @@ impl Default for Builder {
             model: ModelSource::default(),
             fit: FitOptions::default(),
             rest_pose: true,
+            landmark_smoothing: Some(DEFAULT_LANDMARK_SMOOTHING),
+            latency: DEFAULT_LATENCY_FRAMES,
         }
     }
 }
@@ -151,6 +160,37 @@ impl Builder {
     pub fn rest_pose(mut self, on: bool) -> Self {
         self.rest_pose = on;
         self
+    }
+
+    /// The temporal model of the tracked landmarks: a constant-velocity Kalman smoother with
+    /// this ratio of acceleration to measurement noise (1/s²; larger follows faster and
+    /// smooths less), or `None` to use every frame's landmarks as tracked. Default
+    /// [`DEFAULT_LANDMARK_SMOOTHING`].
+    pub fn landmark_smoothing(mut self, accel_ratio: Option<f64>) -> Self {
+        self.landmark_smoothing = accel_ratio;
+        self
+    }
+
+    /// How many later frames the landmark smoother waits for before giving a frame out
+    /// (default [`DEFAULT_LATENCY_FRAMES`]; 0: a causal filter, every frame given out at
+    /// once). [`crate::Reconstructor::run`] honours it; [`crate::Reconstructor::process`]
+    /// answers every frame at once, so it smooths causally whatever this says. Clip mode
+    /// waits for at least [`crate::CLIP_LATENCY_FRAMES`].
+    pub fn latency(mut self, frames: usize) -> Self {
+        self.latency = frames;
+        self
+    }
+
+    /// Checks the landmark smoothing ratio.
+    pub(crate) fn checked_smoothing(&self) -> Result<Option<f64>, Error> {
+        match self.landmark_smoothing {
+            Some(r) if !(r.is_finite() && r > 0.0) => Err(Error::InvalidOption {
+                name: "--smoothing",
+                value: r.to_string(),
+                reason: "must be a positive number (or \"off\")",
+            }),
+            r => Ok(r),
+        }
     }
 
     pub fn camera(mut self, camera: Camera) -> Self {

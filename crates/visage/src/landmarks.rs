@@ -1,9 +1,13 @@
 //! The `landmarks.json` schema of `visage landmarks` and `visage run`:
 //! `{"frames": [LandmarksFrame, …]}`, one record per frame, every face with its 468 landmarks
 //! (frame pixels; z relative, with the scale of x) and, when the metric fit succeeded, its
-//! head pose. Values are rounded to what the networks resolve (0.001 px, 0.01°).
+//! head pose, and, for the face a mesh was made of, the fused surface's 468 landmark points
+//! projected into the frame (`fused_landmarks`, the same pixel convention), so the result can
+//! be measured against the tracked points. Values are rounded to what the networks resolve
+//! (0.001 px, 0.01°).
 
 use serde::Serialize;
+use visage_camera::Intrinsics;
 use visage_face::{Face, FaceGeometry};
 
 use crate::metrics::PoseMetrics;
@@ -35,6 +39,10 @@ pub struct FaceRecord {
     /// The metric head pose, when the fit succeeded.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pose: Option<PoseRecord>,
+    /// The fused surface's 468 landmark points projected into the frame, `[u, v]` pixels
+    /// (when the face was meshed; `visage run`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fused_landmarks: Option<Vec<[f64; 2]>>,
 }
 
 /// Metric head pose `X_cam = R · X_canonical + t` (camera coordinates, metres), its Z-Y-X
@@ -59,6 +67,30 @@ impl FaceRecord {
             presence: r(face.landmarks.presence),
             landmarks: face.landmarks.points.iter().map(|p| p.map(r)).collect(),
             pose: fit.map(PoseRecord::new),
+            fused_landmarks: None,
+        }
+    }
+}
+
+impl LandmarksFrame {
+    /// Records the fused surface's landmark points (camera coordinates, metres) projected
+    /// with `k` on the frame's meshed face (the first). Points that cannot be projected (the
+    /// image mesh's landmarks outside its domain) are NaN and written as `null`.
+    pub fn set_fused(&mut self, k: &Intrinsics, fused_landmarks: &[[f64; 3]]) {
+        let r = |v: f64| (v * 1000.0).round() / 1000.0;
+        if let Some(face) = self.faces.first_mut() {
+            face.fused_landmarks = Some(
+                fused_landmarks
+                    .iter()
+                    .map(|&p| {
+                        if p[2] > 0.0 {
+                            k.project(p).map(r)
+                        } else {
+                            [f64::NAN; 2]
+                        }
+                    })
+                    .collect(),
+            );
         }
     }
 }

@@ -50,6 +50,7 @@ mod error;
 mod gaze;
 mod histogram;
 mod input;
+mod landmark_smoothing;
 mod landmarks;
 mod lid_gate;
 mod metrics;
@@ -61,6 +62,7 @@ mod reconstructor;
 mod recorder;
 mod rest_pose;
 mod rigid_jitter;
+mod shot_cut;
 mod sink;
 mod stages;
 
@@ -79,6 +81,10 @@ pub use depth_folder::{fuse_depth_folder, FuseOptions};
 pub use error::Error;
 pub use gaze::{eye_gaze, eye_look_weights, EyeGaze};
 pub use input::Input;
+pub use landmark_smoothing::{
+    CLIP_LATENCY_FRAMES, DEFAULT_DISTANCE_SMOOTHING, DEFAULT_FRAME_INTERVAL_S,
+    DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES,
+};
 pub use landmarks::{FaceRecord, LandmarksFrame, PoseRecord};
 pub use metrics::{
     FrameMetrics, FrameQuality, FrameStatus, MeshSummary, Percentiles, PoseMetrics, Report,
@@ -90,6 +96,7 @@ pub use quality::{FusedAndRaw, QualitySummary};
 pub use reconstructor::{error_chain, FrameResult, Identity, Reconstructor, RunOutcome};
 pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP};
 pub use rigid_jitter::rigid_residual_rms;
+pub use shot_cut::{CUT_FACE_JUMP, CUT_PICTURE_CHANGE};
 pub use sink::{FrameSink, MeshFrame};
 pub use stages::Surfaces;
 

@@ -135,6 +135,10 @@ pub struct FrameMetrics {
     /// Whether the face detector ran (video runs; the rest of the frames were tracked).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub detector_ran: Option<bool>,
+    /// The frame starts a new shot (a cut, or the face jumped): the tracker looked for the
+    /// face afresh and the temporal terms restarted here.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub cut: bool,
     pub ms: StageTimes,
     /// Fraction of the vertices (face mesh) or domain pixels (image mesh) with valid depth.
     pub valid_fraction: f64,
@@ -168,6 +172,7 @@ impl FrameMetrics {
             time_s: None,
             status,
             detector_ran: None,
+            cut: false,
             ms: StageTimes::default(),
             valid_fraction: 0.0,
             relative_residual: 0.0,
@@ -235,6 +240,8 @@ pub struct RunSummary {
     pub cpu_use: Option<f64>,
     /// Frames on which the face detector ran (the rest were tracked).
     pub detector_runs: usize,
+    /// Frames (input indices) that start a new shot; the temporal terms restarted there.
+    pub cuts: Vec<usize>,
     /// Peak resident set size (VmHWM), MiB.
     pub peak_rss_mib: Option<f64>,
     /// Per stage: median, 95th percentile, mean (ms) over all frames.
@@ -293,6 +300,7 @@ impl RunSummary {
                 .iter()
                 .filter(|f| f.detector_ran == Some(true))
                 .count(),
+            cuts: frames.iter().filter(|f| f.cut).map(|f| f.index).collect(),
             peak_rss_mib: timing.peak_rss_mib,
             stages,
             max_relative_residual: solved

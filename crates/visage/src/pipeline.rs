@@ -17,6 +17,7 @@
 //! received (the sink keeps what it got), the stages before it stop when their next send
 //! fails. The first error in pipeline order is the run's error.
 
+use std::collections::VecDeque;
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::time::Instant;
 
@@ -95,6 +96,8 @@ pub(crate) fn run_stages(
     let (recycle_tx, recycle_rx) = sync_channel::<Box<Surfaces>>(2 * QUEUE_CAPACITY + 2);
     let mut consumer = Consumer {
         k,
+        clip_mode: mode == TemporalMode::Clip,
+        pending: VecDeque::new(),
         recorder,
         triangles,
         uvs: fuse.fusion.uvs().to_vec(),
@@ -147,8 +150,14 @@ fn track_stage(
     out: SyncSender<(Tracked, Frame)>,
 ) -> Result<(), Error> {
     for Decoded { frame, decode_ms } in input {
-        let tracked = face.track(&frame, decode_ms)?;
-        if out.send((tracked, frame)).is_err() {
+        for done in face.track(frame, decode_ms)? {
+            if out.send(done).is_err() {
+                return Ok(());
+            }
+        }
+    }
+    for done in face.finish()? {
+        if out.send(done).is_err() {
             return Ok(());
         }
     }
@@ -172,8 +181,8 @@ fn model_stage(
     Ok(())
 }
 
-/// Clip mode: the frames of one face track (no face lost in between) and their indices.
-type ClipSegment = Vec<(usize, ClipFrame)>;
+/// Clip mode: a face track's frames (input index, fusion state, the landmarks as tracked).
+type ClipSegment = Vec<(usize, ClipFrame, Vec<[f64; 2]>)>;
 
 fn fuse_stage(
     fuse: &mut FuseStage,
@@ -196,20 +205,25 @@ fn fuse_stage(
             }
         }
         let mut surfaces = None;
+        // A lost face or a cut ends the clip solve's segment: no temporal coupling across.
+        if (tracked.face.is_none() || tracked.cut) && segments.last().is_some_and(|s| !s.is_empty())
+        {
+            segments.push(Vec::new());
+        }
         match (&tracked.face, mode) {
-            (None, _) => {
-                if segments.last().is_some_and(|s| !s.is_empty()) {
-                    segments.push(Vec::new());
-                }
-            }
+            (None, _) => {}
             (Some(face), TemporalMode::Streaming) if tracked.metrics.has_mesh() => {
                 let mut s = recycle.try_recv().unwrap_or_default();
-                fuse.fill_surfaces(&face.landmarks_px, &mut s);
+                fuse.fill_surfaces(&face.landmarks_px, &face.tracked_px, &mut s);
                 surfaces = Some(s);
             }
             (Some(face), TemporalMode::Clip) if tracked.metrics.has_mesh() => {
                 if let Some(segment) = segments.last_mut() {
-                    segment.push((tracked.metrics.index, fuse.clip_frame(&face.landmarks_px)));
+                    segment.push((
+                        tracked.metrics.index,
+                        fuse.clip_frame(&face.landmarks_px),
+                        face.tracked_px.clone(),
+                    ));
                 }
             }
             (Some(_), _) => {}
@@ -227,13 +241,20 @@ fn fuse_stage(
     }
     for segment in segments.into_iter().filter(|s| !s.is_empty()) {
         let start = Instant::now();
-        let (indices, mut frames): (Vec<usize>, Vec<ClipFrame>) = segment.into_iter().unzip();
+        let mut indices = Vec::with_capacity(segment.len());
+        let mut frames = Vec::with_capacity(segment.len());
+        let mut tracked = Vec::with_capacity(segment.len());
+        for (index, frame, tracked_px) in segment {
+            indices.push(index);
+            frames.push(frame);
+            tracked.push(tracked_px);
+        }
         let report = fuse.fusion.solve_clip(&mut frames, clip);
         let share = start.elapsed().as_secs_f64() * 1e3 / frames.len() as f64;
-        for (index, frame) in indices.into_iter().zip(&frames) {
+        for ((index, frame), tracked_px) in indices.into_iter().zip(&frames).zip(&tracked) {
             let quality = fuse.fusion.load_clip_frame(frame);
             let mut s = recycle.try_recv().unwrap_or_default();
-            fuse.fill_surfaces(&frame.landmarks_px, &mut s);
+            fuse.fill_surfaces(&frame.landmarks_px, tracked_px, &mut s);
             let message = ToSink::ClipSurfaces {
                 index,
                 surfaces: s,
@@ -252,6 +273,10 @@ fn fuse_stage(
 /// The calling thread's part: records, quality figures, the sink.
 struct Consumer<'a> {
     k: Intrinsics,
+    clip_mode: bool,
+    /// Clip mode: landmarks records in input order, each waiting (`true`) for its frame's
+    /// clip-solved surface (its fused landmarks) or ready.
+    pending: VecDeque<(Box<LandmarksFrame>, bool)>,
     recorder: &'a mut Recorder,
     triangles: &'a mut Vec<[u32; 3]>,
     /// Texture coordinates per vertex (empty: none).
@@ -279,7 +304,16 @@ impl Consumer<'_> {
                     if let Some(w) = &warning {
                         self.sink.warning(w);
                     }
-                    self.sink.landmarks(&landmarks)?;
+                    let mut landmarks = landmarks;
+                    if let Some(s) = &surfaces {
+                        landmarks.set_fused(&self.k, &s.fused_landmarks);
+                    }
+                    let waits = self.clip_mode && metrics.has_mesh();
+                    if waits || !self.pending.is_empty() {
+                        self.pending.push_back((landmarks, waits));
+                    } else {
+                        self.sink.landmarks(&landmarks)?;
+                    }
                     if let Some(b) = &blendshapes {
                         self.sink.blendshapes(b)?;
                     }
@@ -308,9 +342,24 @@ impl Consumer<'_> {
                     m.relative_residual = relative_residual;
                     m.ms.fuse += extra_fuse_ms;
                     self.mesh(position, &surfaces)?;
+                    if let Some(entry) = self.pending.iter_mut().find(|(l, _)| l.index == index) {
+                        entry.0.set_fused(&self.k, &surfaces.fused_landmarks);
+                        entry.1 = false;
+                    }
+                    self.flush_landmarks(false)?;
                     let _ = recycle.try_send(surfaces);
                     self.recorder.frames[position].ms.write += start.elapsed().as_secs_f64() * 1e3;
                 }
+            }
+        }
+        self.flush_landmarks(true)
+    }
+
+    /// Hands the waiting landmarks records that are ready (`all`: every one) to the sink.
+    fn flush_landmarks(&mut self, all: bool) -> Result<(), Error> {
+        while self.pending.front().is_some_and(|(_, waits)| all || !waits) {
+            if let Some((landmarks, _)) = self.pending.pop_front() {
+                self.sink.landmarks(&landmarks)?;
             }
         }
         Ok(())

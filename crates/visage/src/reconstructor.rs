@@ -1,6 +1,7 @@
 //! [`Reconstructor`]: frames in, a fused metric face mesh per frame out — one frame at a time
 //! ([`Reconstructor::process`]) or a whole input on threads ([`Reconstructor::run`]).
 
+use std::collections::VecDeque;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -13,12 +14,16 @@ use visage_video::Frame;
 
 use crate::animation::{BlendshapeFrame, IctToArkit};
 use crate::config::{Builder, ModelSource, Parameters};
+use crate::landmark_smoothing::{
+    DistanceSmoother, LandmarkSmoother, CLIP_LATENCY_FRAMES, DEFAULT_DISTANCE_SMOOTHING,
+};
 use crate::landmarks::LandmarksFrame;
 use crate::lid_gate::LidGate;
 use crate::metrics::{FrameMetrics, MeshSummary, Report, RunStatus, RunSummary, RunTiming};
 use crate::pipeline::{run_stages, Stages};
 use crate::recorder::Recorder;
 use crate::rest_pose::RestPose;
+use crate::shot_cut::CutDetector;
 use crate::stages::{FaceStage, FuseStage, ModelStage, Surfaces};
 use crate::{DepthSource, Error, FrameSink, Input, TemporalMode};
 
@@ -162,6 +167,11 @@ impl Reconstructor {
     ) -> Result<Reconstructor, Error> {
         let start = Instant::now();
         let params = builder.fusion_params()?;
+        let smoothing = builder.checked_smoothing()?;
+        let latency = match builder.mode {
+            TemporalMode::Streaming => builder.latency,
+            TemporalMode::Clip => builder.latency.max(CLIP_LATENCY_FRAMES),
+        };
         let uses_model =
             params.mesh == MeshKind::Model || matches!(builder.depth, DepthSource::Model);
         if uses_model && matches!(builder.model, ModelSource::None) {
@@ -229,6 +239,8 @@ impl Reconstructor {
             mode: builder.mode,
             depth: builder.depth.describe(),
             model: model_name,
+            landmark_smoothing: smoothing,
+            latency_frames: if smoothing.is_some() { latency } else { 0 },
         };
         let model_mesh = TriMesh::new(
             Vec::new(),
@@ -257,6 +269,12 @@ impl Reconstructor {
                 canonical: canonical.clone(),
                 tracker,
                 fps,
+                smoother: smoothing.map(|r| LandmarkSmoother::new(r, latency)),
+                cuts: CutDetector::default(),
+                last_tracked: None,
+                waiting: VecDeque::new(),
+                distance: smoothing.map(|_| DistanceSmoother::new(DEFAULT_DISTANCE_SMOOTHING)),
+                distance_track: false,
             },
             model_stage,
             model,
@@ -307,7 +325,11 @@ impl Reconstructor {
     /// # Errors
     /// A frame of another size than the camera's, a network or fusion failure.
     pub fn process(&mut self, frame: &Frame) -> Result<FrameResult<'_>, Error> {
-        let mut tracked = self.face.track(frame, 0.0)?;
+        // One frame in, that frame out: the landmark smoother without latency.
+        self.face.make_causal();
+        let Some((mut tracked, _)) = self.face.track(frame.clone(), 0.0)?.pop() else {
+            unreachable!("without latency every frame comes out at once");
+        };
         if let Some(model) = &mut self.model_stage {
             model.fit(&frame.image, &mut tracked)?;
         }
@@ -317,7 +339,7 @@ impl Reconstructor {
         if let (true, Some(face)) = (has_mesh, &tracked.face) {
             let start = Instant::now();
             self.fuse
-                .fill_surfaces(&face.landmarks_px, &mut self.surfaces);
+                .fill_surfaces(&face.landmarks_px, &face.tracked_px, &mut self.surfaces);
             self.recorder
                 .measure(position, &self.face.k, &self.surfaces);
             if self.mesh.triangles.is_empty() {
@@ -332,6 +354,9 @@ impl Reconstructor {
         self.warning = tracked.warning;
         self.blendshapes = tracked.blendshapes;
         let landmarks = self.landmarks.insert(tracked.landmarks);
+        if has_mesh {
+            landmarks.set_fused(&self.face.k, &self.surfaces.fused_landmarks);
+        }
         Ok(FrameResult {
             metrics: &self.recorder.frames[position],
             landmarks,

@@ -3,6 +3,7 @@
 //! [`FaceStage`] tracks the face, regresses its landmarks and fits the metric face;
 //! [`FuseStage`] gets the frame's depth and fuses it into the surface.
 
+use std::collections::VecDeque;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -10,7 +11,7 @@ use image::RgbImage;
 use visage_camera::RigidTransform;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_face::{
-    fit_face_geometry, render_faces_depth, render_surface_depth, CanonicalMesh, Eye, Eyes,
+    fit_face_geometry, render_faces_depth, render_surface_depth, CanonicalMesh, Eye, Eyes, Face,
     FaceGeometry, FaceTracker, IrisLandmarker,
 };
 use visage_fusion::{ClipFrame, FaceFrame, FusedSurfaces, MeshKind, ModelFrame, SurfaceFusion};
@@ -23,18 +24,22 @@ use visage_video::Frame;
 
 use crate::animation::{live_link_angles, BlendshapeFrame, IctToArkit, ARKIT_BLENDSHAPES};
 use crate::gaze::{eye_gaze, eye_look_weights, EyeGaze};
+use crate::landmark_smoothing::{DistanceSmoother, LandmarkSmoother};
 use crate::landmarks::{FaceRecord, LandmarksFrame};
 use crate::lid_gate::LidGate;
 use crate::metrics::{FrameMetrics, FrameQuality, FrameStatus, PoseMetrics};
 use crate::rest_pose::{lips_closed, RestPose};
+use crate::shot_cut::{face_jumped, CutDetector};
 use crate::{DepthSource, Error};
 
 /// A face found and fitted in a frame.
 pub(crate) struct TrackedFace {
-    /// The 468 landmarks, frame pixels.
+    /// The 468 landmarks the pipeline works with (the temporal model's), frame pixels.
     pub landmarks_px: Vec<[f64; 2]>,
-    /// The same as the network gave them (x, y in frame pixels, z relative).
+    /// The same with the relative z (x, y in frame pixels, z relative).
     pub points: Vec<[f32; 3]>,
+    /// The landmarks as the network gave them for this frame, frame pixels.
+    pub tracked_px: Vec<[f64; 2]>,
     pub geometry: FaceGeometry,
     /// `[x, y, w, h]`, frame pixels.
     pub face_box: [f32; 4],
@@ -52,6 +57,8 @@ pub(crate) struct Tracked {
     pub blendshapes: Option<BlendshapeFrame>,
     /// The fitted model's surface, when the model mesh or the model depth needs it.
     pub model: Option<FittedModel>,
+    /// The frame starts a new shot: the temporal terms restart here.
+    pub cut: bool,
 }
 
 /// The morphable model fitted to a frame, as a surface.
@@ -99,9 +106,11 @@ impl ModelStage {
     /// blendshapes; a frame without a face ends the fit's track.
     pub fn fit(&mut self, image: &RgbImage, tracked: &mut Tracked) -> Result<(), Error> {
         let start = Instant::now();
-        let Some(face) = &tracked.face else {
+        if tracked.face.is_none() || tracked.cut {
             self.fitter.lose_track();
             self.lids.lose_track();
+        }
+        let Some(face) = &tracked.face else {
             return Ok(());
         };
         let rotation = mat3_mul(&face.geometry.pose.rotation, &FRONTAL);
@@ -186,44 +195,194 @@ impl ModelStage {
     }
 }
 
-/// Face tracking, landmarks and the metric face fit.
+/// Face tracking, landmarks, the temporal model of the landmarks and the metric face fit.
 pub(crate) struct FaceStage {
     pub k: Intrinsics,
     pub canonical: Arc<CanonicalMesh>,
     pub tracker: FaceTracker,
     /// The input's frame rate, for timestamps of frames that have none.
     pub fps: Option<f64>,
+    /// The temporal model of the landmarks (None: each frame as tracked).
+    pub smoother: Option<LandmarkSmoother>,
+    pub cuts: CutDetector,
+    /// The previous frame's tracked landmarks, if it had a face.
+    pub last_tracked: Option<Vec<[f64; 2]>>,
+    /// Frames tracked but not given out yet, in input order (the smoother's latency).
+    pub waiting: VecDeque<Observed>,
+    /// The head's distance filter (None: as fitted), and whether the last frame given out had
+    /// a fitted face.
+    pub distance: Option<DistanceSmoother>,
+    pub distance_track: bool,
+}
+
+/// A frame after tracking, before the temporal model and the fit.
+pub(crate) struct Observed {
+    frame: Frame,
+    metrics: FrameMetrics,
+    face: Option<Face>,
+    tracked_px: Vec<[f64; 2]>,
+    warning: Option<String>,
+    cut: bool,
+    /// The landmarks to fit (the smoother's), once known; frames without a face are ready
+    /// at once.
+    points: Option<Vec<[f32; 3]>>,
+}
+
+impl Observed {
+    fn ready(&self) -> bool {
+        self.face.is_none() || self.points.is_some()
+    }
 }
 
 impl FaceStage {
-    /// Tracks the face in `frame` and fits the metric face to its landmarks.
-    pub fn track(&mut self, frame: &Frame, decode_ms: f64) -> Result<Tracked, Error> {
+    /// Tracks the face in `frame` and returns the frames now complete, in input order: this
+    /// one at once without latency, else the one `latency` frames back (or several, after a
+    /// cut or a lost face ends a track).
+    pub fn track(&mut self, frame: Frame, decode_ms: f64) -> Result<Vec<(Tracked, Frame)>, Error> {
         let (w, h) = frame.image.dimensions();
         self.k
             .check_size(w, h)
             .map_err(|e| Error::on_frame(&frame.source, "intrinsics do not fit the frame", e))?;
+        let time_s = frame
+            .timestamp_s
+            .or_else(|| self.fps.map(|fps| frame.index as f64 / fps));
         let t = Instant::now();
+        let picture_cut = self.cuts.picture_cut(&frame.image);
+        if picture_cut {
+            // A new shot: look for the face afresh rather than where it was.
+            self.tracker.reset();
+        }
         let step = self
             .tracker
             .track(&frame.image)
             .map_err(|e| Error::on_frame(&frame.source, "face tracking", e))?;
-        let track_ms = t.elapsed().as_secs_f64() * 1e3;
+        let mut metrics = FrameMetrics::new(frame.index, frame.source.clone(), FrameStatus::NoFace);
+        metrics.time_s = time_s;
+        metrics.detector_ran = Some(step.detector_ran);
+        metrics.ms.decode = decode_ms;
+        metrics.ms.track = t.elapsed().as_secs_f64() * 1e3;
+        let mut cut = picture_cut;
+        let mut tracked_px = Vec::new();
+        if let Some(face) = &step.face {
+            tracked_px = face
+                .landmarks
+                .points
+                .iter()
+                .map(|p| [p[0] as f64, p[1] as f64])
+                .collect();
+            cut |= self
+                .last_tracked
+                .as_ref()
+                .is_some_and(|last| face_jumped(last, &tracked_px));
+        }
+        metrics.cut = cut;
+        // A cut or a lost face ends the smoother's track: its waiting frames complete now.
+        if cut || step.face.is_none() {
+            self.finish_track();
+        }
+        self.last_tracked = step.face.as_ref().map(|_| tracked_px.clone());
+        let warning = step
+            .face
+            .is_none()
+            .then(|| format!("{}: no face found; no mesh", frame.source));
+        let mut observed = Observed {
+            frame,
+            metrics,
+            face: step.face,
+            tracked_px,
+            warning,
+            cut,
+            points: None,
+        };
+        match (&observed.face, &mut self.smoother) {
+            (Some(face), Some(smoother)) => {
+                let smoothed = smoother.push(&face.landmarks.points, time_s);
+                self.waiting.push_back(observed);
+                if let Some(points) = smoothed {
+                    self.complete_next(points);
+                }
+            }
+            (Some(face), None) => {
+                observed.points = Some(face.landmarks.points.clone());
+                self.waiting.push_back(observed);
+            }
+            (None, _) => self.waiting.push_back(observed),
+        }
+        self.take_ready()
+    }
+
+    /// Makes the landmark smoother causal (latency 0: every frame given out at once).
+    pub fn make_causal(&mut self) {
+        if let Some(s) = &mut self.smoother {
+            s.make_causal();
+        }
+    }
+
+    /// The frames still held back (the end of the input).
+    pub fn finish(&mut self) -> Result<Vec<(Tracked, Frame)>, Error> {
+        self.finish_track();
+        self.take_ready()
+    }
+
+    /// Gives the smoother's waiting frames their landmarks and restarts it.
+    fn finish_track(&mut self) {
+        if let Some(smoother) = &mut self.smoother {
+            for points in smoother.finish() {
+                self.complete_next(points);
+            }
+        }
+    }
+
+    /// The smoothed landmarks of the oldest waiting frame that has a face and none yet.
+    fn complete_next(&mut self, points: Vec<[f32; 3]>) {
+        if let Some(o) = self.waiting.iter_mut().find(|o| !o.ready()) {
+            o.points = Some(points);
+        }
+    }
+
+    /// Fits and gives out the ready frames at the front of the queue.
+    fn take_ready(&mut self) -> Result<Vec<(Tracked, Frame)>, Error> {
+        let mut out = Vec::new();
+        while self.waiting.front().is_some_and(Observed::ready) {
+            if let Some(o) = self.waiting.pop_front() {
+                out.push(self.settle(o));
+            }
+        }
+        Ok(out)
+    }
+
+    /// The metric face fit of a frame's (smoothed) landmarks and its records.
+    fn settle(&mut self, o: Observed) -> (Tracked, Frame) {
+        let Observed {
+            frame,
+            mut metrics,
+            face,
+            tracked_px,
+            mut warning,
+            cut,
+            points,
+        } = o;
         let t = Instant::now();
+        let (w, h) = frame.image.dimensions();
         let mut faces = Vec::new();
-        let mut warning = None;
-        let face = match step.face {
-            Some(face) => {
-                match fit_face_geometry(&self.canonical, &face.landmarks.points, &self.k) {
-                    Ok(geometry) => {
+        let tracked_face = match (face, points) {
+            (Some(face), Some(points)) => {
+                match fit_face_geometry(&self.canonical, &points, &self.k) {
+                    Ok(mut geometry) => {
+                        if let Some(d) = &mut self.distance {
+                            if cut || !self.distance_track {
+                                d.reset();
+                            }
+                            d.smooth(&mut geometry, metrics.time_s);
+                        }
                         faces.push(FaceRecord::new(&face, Some(&geometry)));
                         Some(TrackedFace {
-                            points: face.landmarks.points.clone(),
-                            landmarks_px: face
-                                .landmarks
-                                .points
+                            landmarks_px: points
                                 .iter()
                                 .map(|p| [p[0] as f64, p[1] as f64])
                                 .collect(),
+                            points,
+                            tracked_px,
                             geometry,
                             face_box: face.bbox,
                         })
@@ -235,23 +394,13 @@ impl FaceStage {
                     }
                 }
             }
-            None => {
-                warning = Some(format!("{}: no face found; no mesh", frame.source));
-                None
-            }
+            _ => None,
         };
-        let time_s = frame
-            .timestamp_s
-            .or_else(|| self.fps.map(|fps| frame.index as f64 / fps));
-        let mut metrics = FrameMetrics::new(frame.index, frame.source.clone(), FrameStatus::NoFace);
-        metrics.time_s = time_s;
-        metrics.detector_ran = Some(step.detector_ran);
-        metrics.ms.decode = decode_ms;
-        metrics.ms.track = track_ms;
+        self.distance_track = tracked_face.is_some();
         metrics.ms.fit = t.elapsed().as_secs_f64() * 1e3;
-        Ok(Tracked {
+        let tracked = Tracked {
             metrics,
-            face,
+            face: tracked_face,
             landmarks: LandmarksFrame {
                 source: frame.source.clone(),
                 index: frame.index,
@@ -262,12 +411,14 @@ impl FaceStage {
             warning,
             blendshapes: None,
             model: None,
-        })
+            cut,
+        };
+        (tracked, frame)
     }
 }
 
 /// One frame's surfaces (buffers reused from frame to frame): fused and raw on the mesh, both
-/// at the 468 landmarks, and the tracked landmark pixels.
+/// at the 468 landmarks, and the landmark pixels as tracked.
 #[derive(Clone, Debug, Default)]
 pub struct Surfaces {
     /// #V camera-space points, metres.
@@ -278,7 +429,7 @@ pub struct Surfaces {
     /// the image-plane mesh).
     pub fused_landmarks: Vec<[f64; 3]>,
     pub raw_landmarks: Vec<[f64; 3]>,
-    /// The tracked landmarks, frame pixels.
+    /// The landmarks as the network gave them (before the temporal model), frame pixels.
     pub landmarks_px: Vec<[f64; 2]>,
 }
 
@@ -298,8 +449,10 @@ impl FuseStage {
     /// fusion's history.
     pub fn fuse(&mut self, tracked: &mut Tracked) -> Result<(), Error> {
         let metrics = &mut tracked.metrics;
-        let Some(face) = &tracked.face else {
+        if tracked.face.is_none() || tracked.cut {
             self.fusion.reset();
+        }
+        let Some(face) = &tracked.face else {
             return Ok(());
         };
         metrics.pose = Some(PoseMetrics::of(&face.geometry.pose));
@@ -369,14 +522,20 @@ impl FuseStage {
         Ok(())
     }
 
-    /// Copies the current surfaces into `s` (the frame just fused, or a loaded clip frame).
-    pub fn fill_surfaces(&self, landmarks_px: &[[f64; 2]], s: &mut Surfaces) {
+    /// Copies the current surfaces into `s` (the frame just fused, or a loaded clip frame):
+    /// `landmarks_px` are the landmarks the frame was fused with, `tracked_px` the network's.
+    pub fn fill_surfaces(
+        &self,
+        landmarks_px: &[[f64; 2]],
+        tracked_px: &[[f64; 2]],
+        s: &mut Surfaces,
+    ) {
         s.fused.clear();
         s.fused.extend_from_slice(self.fusion.fused());
         s.raw.clear();
         s.raw.extend_from_slice(self.fusion.raw());
         s.landmarks_px.clear();
-        s.landmarks_px.extend_from_slice(landmarks_px);
+        s.landmarks_px.extend_from_slice(tracked_px);
         self.fusion
             .landmark_points(landmarks_px, &mut s.fused_landmarks, &mut s.raw_landmarks);
     }

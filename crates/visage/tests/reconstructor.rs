@@ -23,9 +23,19 @@ struct Collect {
 }
 
 impl FrameSink for Collect {
-    fn landmarks(&mut self, _: &LandmarksFrame) -> Result<(), Error> {
+    fn landmarks(&mut self, record: &LandmarksFrame) -> Result<(), Error> {
+        let fused = record.faces[0].fused_landmarks.as_ref();
+        assert_eq!(
+            fused.map(Vec::len),
+            Some(468),
+            "every meshed frame's fused landmarks"
+        );
         self.events.push("landmarks");
         Ok(())
+    }
+
+    fn frame_done(&mut self, _: &visage::FrameMetrics) {
+        self.events.push("done");
     }
     fn mesh(&mut self, frame: &MeshFrame<'_>) -> Result<(), Error> {
         assert!(frame
@@ -59,9 +69,14 @@ fn process_and_run_give_the_same_meshes() {
     }
     assert_eq!(single.frames().len(), FRAMES);
 
+    // `process` answers each frame at once: the same as a run without latency.
     let input = Input::open(&clip()).unwrap().max_frames(FRAMES).unwrap();
     let mut sink = Collect::default();
-    let outcome = builder().build_for(&input).unwrap().run(input, &mut sink);
+    let outcome = builder()
+        .latency(0)
+        .build_for(&input)
+        .unwrap()
+        .run(input, &mut sink);
     assert!(outcome.error.is_none());
     assert_eq!(outcome.summary.solved, FRAMES);
     assert_eq!(sink.meshes, by_process, "threads must not change a result");
@@ -93,8 +108,14 @@ fn clip_mode_hands_the_meshes_over_after_the_clip_solve() {
     assert!(outcome.error.is_none());
     let first_mesh = sink.events.iter().position(|e| *e == "mesh").unwrap();
     assert_eq!(
-        first_mesh, FRAMES,
+        sink.events[..first_mesh],
+        ["done"; FRAMES],
         "all frames are fused before the clip solve"
+    );
+    // Each landmarks record waits for its mesh (its fused landmarks), in input order.
+    assert_eq!(
+        sink.events[first_mesh..],
+        ["mesh", "landmarks"].repeat(FRAMES)
     );
     let indices: Vec<usize> = sink.meshes.iter().map(|m| m.0).collect();
     assert_eq!(indices, (0..FRAMES).collect::<Vec<_>>());

@@ -40,6 +40,33 @@ pub enum ModeArg {
     Clip,
 }
 
+/// `--smoothing`: a positive ratio or `off`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SmoothingArg(pub Option<f64>);
+
+impl std::str::FromStr for SmoothingArg {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s == "off" {
+            return Ok(SmoothingArg(None));
+        }
+        match s.parse::<f64>() {
+            Ok(r) if r.is_finite() && r > 0.0 => Ok(SmoothingArg(Some(r))),
+            _ => Err(format!("{s:?} is neither a positive number nor \"off\"")),
+        }
+    }
+}
+
+impl std::fmt::Display for SmoothingArg {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.0 {
+            Some(r) => write!(f, "{r}"),
+            None => f.write_str("off"),
+        }
+    }
+}
+
 /// The options `visage run` and `visage bench` share.
 #[derive(Args, Debug)]
 pub struct PipelineArgs {
@@ -66,6 +93,15 @@ pub struct PipelineArgs {
     /// mesh, 2 on the model mesh).
     #[arg(long, allow_hyphen_values = true)]
     pub mu: Option<f64>,
+    /// The temporal model of the tracked landmarks: a constant-velocity Kalman filter with
+    /// this acceleration-to-noise ratio (1/s²; larger follows faster motion and smooths
+    /// less), or `off` to use every frame's landmarks as tracked.
+    #[arg(long, default_value_t = SmoothingArg(Some(visage::DEFAULT_LANDMARK_SMOOTHING)))]
+    pub smoothing: SmoothingArg,
+    /// Frames the landmark smoother waits for before giving a frame out (0: causal, each
+    /// frame at once; 1 lets each frame see where the motion went next).
+    #[arg(long, default_value_t = visage::DEFAULT_LATENCY_FRAMES)]
+    pub latency: usize,
     /// Mesh design.
     #[arg(long, value_enum, default_value = "face")]
     pub mesh: MeshArg,
@@ -171,6 +207,9 @@ impl PipelineArgs {
             })
             .subdivision(self.subdivision)
             .spacing(self.spacing);
+        builder = builder
+            .landmark_smoothing(self.smoothing.0)
+            .latency(self.latency);
         if let Some(lambda) = self.lambda {
             builder = builder.lambda(lambda);
         }
