@@ -27,6 +27,7 @@ mod svg_plot;
 mod synthesis;
 mod taubin;
 mod trajectory;
+mod video_report;
 
 pub use benchmark::{
     methods, mix_seed, run_benchmark, run_sweep, sequence_seed, tune_taubin, AnchoringInfo,
@@ -43,10 +44,14 @@ pub use noise::{NoiseGenerator, NoiseModel, NOISE_PRESETS};
 pub use normal::standard_normal;
 pub use report::{csv, sweep_table, table, write_results, write_sweep};
 pub use simulated_tracker::{simulate_tracking, TrackedSequence, TrackerNoise};
-pub use svg_plot::{heatmap_svg, line_chart_svg, Series};
+pub use svg_plot::{heatmap_svg, line_chart_svg, xy_chart_svg, Series, XySeries};
 pub use synthesis::{
     synthesize, SynthesisConfig, SyntheticFrame, SyntheticSequence, EXPRESSION_ACTIVITY,
     PIVOT_DEPTH_M,
 };
 pub use taubin::{taubin_smooth, TAUBIN_LAMBDA, TAUBIN_MU};
 pub use trajectory::{keyframe_trajectory, smoothstep, SEGMENT_FRAMES};
+pub use video_report::{
+    evaluate_clip, stability_chart_svg, stability_table, ClipReport, ClipTracks, Comparison,
+    MethodFigures, PipelineOutput, RegionFigures,
+};

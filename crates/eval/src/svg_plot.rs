@@ -17,6 +17,12 @@ const W: f64 = 640.0;
 const H: f64 = 400.0;
 const PAD: f64 = 50.0;
 
+/// An axis label: up to three decimals, trailing zeros dropped.
+fn tick(v: f64) -> String {
+    let s = format!("{v:.3}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
 fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -25,12 +31,38 @@ fn escape(s: &str) -> String {
 
 /// A line chart with axes, min/max labels and a legend. Non-finite values are skipped.
 pub fn line_chart_svg(title: &str, x_label: &str, series: &[Series]) -> String {
+    let curves: Vec<XySeries> = series
+        .iter()
+        .map(|se| XySeries {
+            name: se.name.clone(),
+            points: se
+                .values
+                .iter()
+                .enumerate()
+                .map(|(i, &v)| (se.first_x + i as f64, v))
+                .collect(),
+            markers: false,
+        })
+        .collect();
+    xy_chart_svg(title, x_label, "", &curves)
+}
+
+/// One curve of an x–y chart: points joined in order (a non-finite point lifts the pen),
+/// with a dot on each when `markers`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct XySeries {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+    pub markers: bool,
+}
+
+/// An x–y chart with axes, min/max labels and a legend; the y axis starts at 0 or below.
+pub fn xy_chart_svg(title: &str, x_label: &str, y_label: &str, series: &[XySeries]) -> String {
     let finite = series.iter().flat_map(|s| {
-        s.values
+        s.points
             .iter()
-            .enumerate()
-            .filter(|(_, v)| v.is_finite())
-            .map(move |(i, &v)| (s.first_x + i as f64, v))
+            .copied()
+            .filter(|(x, y)| x.is_finite() && y.is_finite())
     });
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, 0.0f64, f64::MIN);
     for (x, y) in finite {
@@ -72,14 +104,16 @@ pub fn line_chart_svg(title: &str, x_label: &str, series: &[Series]) -> String {
     );
     let _ = writeln!(
         s,
-        r#"<text x="{PAD}" y="{}" text-anchor="middle">{x0}</text>"#,
-        H - PAD + 15.0
+        r#"<text x="{PAD}" y="{}" text-anchor="middle">{}</text>"#,
+        H - PAD + 15.0,
+        tick(x0)
     );
     let _ = writeln!(
         s,
-        r#"<text x="{}" y="{}" text-anchor="middle">{x1}</text>"#,
+        r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
         W - PAD,
-        H - PAD + 15.0
+        H - PAD + 15.0,
+        tick(x1)
     );
     let _ = writeln!(
         s,
@@ -88,6 +122,15 @@ pub fn line_chart_svg(title: &str, x_label: &str, series: &[Series]) -> String {
         H - 12.0,
         escape(x_label)
     );
+    if !y_label.is_empty() {
+        let _ = writeln!(
+            s,
+            r#"<text x="14" y="{}" text-anchor="middle" transform="rotate(-90 14 {})">{}</text>"#,
+            H / 2.0,
+            H / 2.0,
+            escape(y_label)
+        );
+    }
     let _ = writeln!(
         s,
         r#"<text x="{}" y="{}" text-anchor="end">{y0:.3}</text>"#,
@@ -104,8 +147,8 @@ pub fn line_chart_svg(title: &str, x_label: &str, series: &[Series]) -> String {
         let color = COLORS[k % COLORS.len()];
         let mut d = String::new();
         let mut pen_down = false;
-        for (i, &v) in se.values.iter().enumerate() {
-            if !v.is_finite() {
+        for &(x, y) in &se.points {
+            if !(x.is_finite() && y.is_finite()) {
                 pen_down = false;
                 continue;
             }
@@ -113,10 +156,18 @@ pub fn line_chart_svg(title: &str, x_label: &str, series: &[Series]) -> String {
                 d,
                 "{}{:.1} {:.1} ",
                 if pen_down { "L" } else { "M" },
-                px(se.first_x + i as f64),
-                py(v)
+                px(x),
+                py(y)
             );
             pen_down = true;
+            if se.markers {
+                let _ = writeln!(
+                    s,
+                    r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{color}"/>"#,
+                    px(x),
+                    py(y)
+                );
+            }
         }
         let _ = writeln!(
             s,

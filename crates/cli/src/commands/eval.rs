@@ -29,6 +29,10 @@ pub enum EvalCommand {
     /// Synthetic ICT-FaceKit sequences with known ground truth: writes OUT/results.json,
     /// results.csv, error/jitter plots (SVG) and prints a table.
     Synthetic(SyntheticArgs),
+    /// Real clips: the temporal model's landmarks against EMA, One-Euro, Kalman and Gaussian
+    /// filters on the tracked landmarks (jitter, deviation, lag, per region); writes
+    /// OUT/results.json and a jitter-against-deviation chart (SVG) per clip, prints a table.
+    Video(super::eval_video::VideoArgs),
 }
 
 /// Arguments of `visage eval synthetic`.
@@ -101,6 +105,7 @@ pub struct SyntheticArgs {
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     match args.command {
         EvalCommand::Synthetic(a) => synthetic(a),
+        EvalCommand::Video(a) => super::eval_video::video(a),
     }
 }
 

@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod bench_solver;
 pub mod eval;
+pub mod eval_video;
 pub mod fuse;
 pub mod landmarks;
 pub mod model;
