@@ -19,6 +19,7 @@ use crate::model_fit::{self, benchmark_face_model, ModelFitSummary};
 use crate::noise::{NoiseGenerator, NoiseModel};
 use crate::simulated_tracker::{simulate_tracking, TrackedSequence, TrackerNoise};
 use crate::synthesis::{synthesize, SynthesisConfig, SyntheticSequence};
+use crate::vertex_filter::VertexFilter;
 use crate::EvalError;
 use visage_morphable::CanonicalCorrespondence;
 
@@ -67,6 +68,9 @@ pub struct BenchmarkConfig {
     pub anchored_subdivision: usize,
     /// Noise of the simulated tracker that feeds the face-anchored methods.
     pub tracker: TrackerNoise,
+    /// The landmark smoother's acceleration-to-noise ratio (1/s²) in the simulated tracker
+    /// (`None`: the landmarks as tracked); default the pipeline's.
+    pub landmark_smoothing: Option<f64>,
     pub meshing: MeshingOptions,
     pub clip: ClipOptions,
     pub max_depth_m: f64,
@@ -79,6 +83,10 @@ pub struct BenchmarkConfig {
     pub identity_modes: usize,
     pub expression_modes: Vec<String>,
 }
+
+/// The simulated tracker's landmark smoothing: the pipeline's default
+/// (`visage::DEFAULT_LANDMARK_SMOOTHING`; the CLI's tests check they agree).
+pub const BENCHMARK_LANDMARK_SMOOTHING: f64 = 1500.0;
 
 /// Expressions of the quick setting: the most visible ones of the shared subset.
 pub const QUICK_EXPRESSIONS: [&str; 4] = ["jawOpen", "mouthSmile_L", "eyeBlink_R", "browInnerUp_L"];
@@ -98,6 +106,7 @@ impl BenchmarkConfig {
             model_weights: visage_fusion::MODEL_WEIGHTS_MAP,
             anchored_subdivision: ANCHORED_SUBDIVISION,
             tracker: TrackerNoise::default(),
+            landmark_smoothing: Some(BENCHMARK_LANDMARK_SMOOTHING),
             meshing: MeshingOptions::default(),
             clip: ClipOptions::default(),
             max_depth_m: DEFAULT_MAX_DEPTH_M,
@@ -335,6 +344,7 @@ impl<'a> PreparedSequence<'a> {
                     &a.correspondence,
                     &a.canonical,
                     &config.tracker,
+                    config.landmark_smoothing,
                     mix_seed(seed ^ TRACKER_SALT),
                 )
             })
@@ -515,6 +525,7 @@ pub fn methods(taubin_iterations: usize, anchored: bool) -> Vec<Method> {
             iterations: taubin_iterations,
         },
     ];
+    m.extend(VertexFilter::ALL.map(Method::RawFiltered));
     if anchored {
         m.extend([
             Method::FaceAnchored,

@@ -27,12 +27,14 @@ mod svg_plot;
 mod synthesis;
 mod taubin;
 mod trajectory;
+mod vertex_filter;
 mod video_report;
 
 pub use benchmark::{
     methods, mix_seed, run_benchmark, run_sweep, sequence_seed, tune_taubin, AnchoringInfo,
     BenchmarkConfig, BenchmarkResults, FaceAnchoring, PreparedSequence, SequenceInfo, SweepPoint,
-    TaubinTuning, ANCHORED_SUBDIVISION, ANCHORED_WEIGHTS, QUICK_EXPRESSIONS, TUNING_SALT,
+    TaubinTuning, ANCHORED_SUBDIVISION, ANCHORED_WEIGHTS, BENCHMARK_LANDMARK_SMOOTHING,
+    QUICK_EXPRESSIONS, TUNING_SALT,
 };
 pub use error::EvalError;
 pub use method::{AnchoredInput, Method, MethodInput, MethodRun, ModelInput, VertexKind};
@@ -43,7 +45,9 @@ pub use metrics::{
 pub use noise::{NoiseGenerator, NoiseModel, NOISE_PRESETS};
 pub use normal::standard_normal;
 pub use report::{csv, sweep_table, table, write_results, write_sweep};
-pub use simulated_tracker::{simulate_tracking, TrackedSequence, TrackerNoise};
+pub use simulated_tracker::{
+    simulate_tracking, TrackedSequence, TrackerNoise, BENCHMARK_LATENCY_FRAMES,
+};
 pub use svg_plot::{heatmap_svg, line_chart_svg, xy_chart_svg, Series, XySeries};
 pub use synthesis::{
     synthesize, SynthesisConfig, SyntheticFrame, SyntheticSequence, EXPRESSION_ACTIVITY,
@@ -51,6 +55,10 @@ pub use synthesis::{
 };
 pub use taubin::{taubin_smooth, TAUBIN_LAMBDA, TAUBIN_MU};
 pub use trajectory::{keyframe_trajectory, smoothstep, SEGMENT_FRAMES};
+pub use vertex_filter::{
+    VertexFilter, EMA_ALPHA, GAUSSIAN_SIGMA_FRAMES, KALMAN_RATIO, ONE_EURO_BETA,
+    ONE_EURO_MIN_CUTOFF_HZ, SYNTHETIC_FRAME_INTERVAL_S,
+};
 pub use video_report::{
     evaluate_clip, stability_chart_svg, stability_table, ClipReport, ClipTracks, Comparison,
     MethodFigures, PipelineOutput, RegionFigures,

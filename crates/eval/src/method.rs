@@ -19,6 +19,7 @@ use visage_morphable::{FaceFitter, FaceModel, FitOptions};
 
 use crate::simulated_tracker::TrackedSequence;
 use crate::taubin::taubin_smooth;
+use crate::vertex_filter::VertexFilter;
 use crate::EvalError;
 
 /// A reconstruction method.
@@ -49,6 +50,9 @@ pub enum Method {
     /// The face-anchored streaming fusion on the model's mesh with each frame's fitted face as
     /// its template: the depth data, smoothed as deviations from the fitted face.
     ModelFusion,
+    /// [`Method::Raw`] with a filter on every vertex's track: what a user could do instead of
+    /// fusing.
+    RawFiltered(VertexFilter),
 }
 
 /// The vertex set a method's outputs live on.
@@ -138,6 +142,10 @@ impl Method {
             Method::FaceAnchoredClip => "face_anchored_clip",
             Method::ModelOnly => "model_only",
             Method::ModelFusion => "model_fusion",
+            Method::RawFiltered(VertexFilter::Ema) => "raw_ema",
+            Method::RawFiltered(VertexFilter::OneEuro) => "raw_one_euro",
+            Method::RawFiltered(VertexFilter::Kalman) => "raw_kalman",
+            Method::RawFiltered(VertexFilter::Gaussian) => "raw_gaussian",
         }
     }
 
@@ -157,6 +165,13 @@ impl Method {
         match *self {
             Method::Raw => Ok(raw(setup()?, input, 0)),
             Method::Taubin { iterations } => Ok(raw(setup()?, input, iterations)),
+            Method::RawFiltered(filter) => {
+                let mut run = raw(setup()?, input, 0);
+                let start = Instant::now();
+                run.solutions = filter.apply(&run.solutions);
+                run.seconds += start.elapsed().as_secs_f64();
+                Ok(run)
+            }
             Method::PerFrameBiharmonic => fused(
                 setup()?,
                 input,

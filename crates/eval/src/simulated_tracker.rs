@@ -11,17 +11,22 @@
 //!   landmarks over the skin);
 //! - **relative depth** as FaceMesh reports it: `(z_k(i) − z̄_k) f / z̄_k` pixels, `z̄_k` the mean
 //!   z of the 468 points, plus white noise of σ `white_px`;
-//! - **head pose** `T_k`: [`visage_face::fit_face_geometry`] on the noisy landmarks — exactly
-//!   what `visage run` does on real video (so pose errors and the canonical face's size
-//!   mismatch with the synthetic identity are part of the test).
+//! - **temporal model** (optional, as `visage run` does by default): the landmarks and their
+//!   relative depth through the constant-velocity Kalman smoother with one frame of latency;
+//! - **head pose** `T_k`: [`visage_face::fit_face_geometry`] on the (smoothed) noisy
+//!   landmarks — exactly what `visage run` does on real video (so pose errors and the
+//!   canonical face's size mismatch with the synthetic identity are part of the test).
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use visage_camera::RigidTransform;
 use visage_face::{fit_face_geometry, CanonicalMesh};
 
+use visage_temporal::FixedLagSmoother;
+
 use crate::normal::standard_normal;
 use crate::synthesis::SyntheticSequence;
+use crate::vertex_filter::SYNTHETIC_FRAME_INTERVAL_S;
 use crate::EvalError;
 use visage_morphable::CanonicalCorrespondence;
 
@@ -80,7 +85,12 @@ pub struct TrackedSequence {
     pub truth: Vec<Vec<[f64; 3]>>,
 }
 
-/// Tracks `seq` with `noise`, deterministically from `seed`.
+/// Latency of the benchmark's landmark smoother, frames (the pipeline's default).
+pub const BENCHMARK_LATENCY_FRAMES: usize = 1;
+
+/// Tracks `seq` with `noise`, deterministically from `seed`; with `smoothing` (the
+/// smoother's acceleration-to-noise ratio, 1/s²) the landmarks go through the pipeline's
+/// temporal model before the fit.
 ///
 /// # Errors
 /// When the metric face fit fails on a frame (degenerate landmarks).
@@ -89,6 +99,7 @@ pub fn simulate_tracking(
     correspondence: &CanonicalCorrespondence,
     canonical: &CanonicalMesh,
     noise: &TrackerNoise,
+    smoothing: Option<f64>,
     seed: u64,
 ) -> Result<TrackedSequence, EvalError> {
     noise.validate()?;
@@ -105,6 +116,8 @@ pub fn simulate_tracking(
         truth: Vec::with_capacity(seq.frames.len()),
     };
     let f = seq.k.focal();
+    // Per frame: x, y (pixels) and relative z of every landmark.
+    let mut tracked: Vec<Vec<f64>> = Vec::with_capacity(seq.frames.len());
     for (index, frame) in seq.frames.iter().enumerate() {
         let mut truth = vec![[0.0; 3]; m];
         correspondence.place(&frame.vertices, &mut truth);
@@ -114,24 +127,39 @@ pub fn simulate_tracking(
             }
         }
         let z_mean = truth.iter().map(|p| p[2]).sum::<f64>() / m as f64;
-        let mut landmarks = Vec::with_capacity(m);
-        let mut points = Vec::with_capacity(m);
+        let mut points = Vec::with_capacity(3 * m);
         for (x, d) in truth.iter().zip(&drift) {
             let p = seq.k.project(*x);
             let px: [f64; 2] =
                 std::array::from_fn(|a| p[a] + d[a] + noise.white_px * standard_normal(&mut rng));
             let z = (x[2] - z_mean) * f / z_mean + noise.white_px * standard_normal(&mut rng);
-            landmarks.push(px);
-            points.push([px[0] as f32, px[1] as f32, z as f32]);
+            points.extend([px[0], px[1], z]);
         }
+        tracked.push(points);
+        out.truth.push(truth);
+    }
+    if let Some(ratio) = smoothing {
+        let mut smoother = FixedLagSmoother::new(ratio, BENCHMARK_LATENCY_FRAMES);
+        let mut smoothed: Vec<Vec<f64>> = tracked
+            .iter()
+            .filter_map(|x| smoother.push(x, SYNTHETIC_FRAME_INTERVAL_S))
+            .collect();
+        smoothed.extend(smoother.finish());
+        tracked = smoothed;
+    }
+    for (index, frame) in tracked.iter().enumerate() {
+        let points: Vec<[f32; 3]> = frame
+            .chunks_exact(3)
+            .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32])
+            .collect();
         let fit =
             fit_face_geometry(canonical, &points, &seq.k).map_err(|e| EvalError::Degenerate {
                 seed: seq.seed,
                 reason: format!("frame {index}: metric face fit: {e}"),
             })?;
-        out.landmarks_px.push(landmarks);
+        out.landmarks_px
+            .push(frame.chunks_exact(3).map(|p| [p[0], p[1]]).collect());
         out.poses.push(fit.pose);
-        out.truth.push(truth);
     }
     Ok(out)
 }

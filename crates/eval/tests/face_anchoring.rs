@@ -77,8 +77,8 @@ fn simulated_tracker_sees_the_truth_with_the_configured_noise() {
         correlated_px: 0.0,
         correlation: 0.0,
     };
-    let t =
-        visage_eval::simulate_tracking(&seq, &a.correspondence, &a.canonical, &exact, 1).unwrap();
+    let t = visage_eval::simulate_tracking(&seq, &a.correspondence, &a.canonical, &exact, None, 1)
+        .unwrap();
     for k in 0..config.frames {
         for (p, x) in t.landmarks_px[k].iter().zip(&t.truth[k]) {
             let q = seq.k.project(*x);
@@ -96,19 +96,26 @@ fn simulated_tracker_sees_the_truth_with_the_configured_noise() {
         );
     }
     let noise = TrackerNoise::default();
-    let n1 =
-        visage_eval::simulate_tracking(&seq, &a.correspondence, &a.canonical, &noise, 1).unwrap();
-    let n2 =
-        visage_eval::simulate_tracking(&seq, &a.correspondence, &a.canonical, &noise, 1).unwrap();
+    let track = |smoothing| {
+        visage_eval::simulate_tracking(&seq, &a.correspondence, &a.canonical, &noise, smoothing, 1)
+            .unwrap()
+    };
+    let (n1, n2) = (track(None), track(None));
     assert_eq!(n1.landmarks_px, n2.landmarks_px);
-    let (mut sq, mut n) = (0.0, 0);
-    for k in 0..config.frames {
-        for (p, q) in n1.landmarks_px[k].iter().zip(&t.landmarks_px[k]) {
-            sq += (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
-            n += 2;
+    let error = |tracked: &visage_eval::TrackedSequence| {
+        let (mut sq, mut n) = (0.0, 0);
+        for k in 0..config.frames {
+            for (p, q) in tracked.landmarks_px[k].iter().zip(&t.landmarks_px[k]) {
+                sq += (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+                n += 2;
+            }
         }
-    }
-    let sigma = (sq / n as f64).sqrt();
+        (sq / n as f64).sqrt()
+    };
+    let sigma = error(&n1);
+    // The pipeline's smoother takes out part of the noise (the white part most).
+    let smoothed = error(&track(Some(visage_eval::BENCHMARK_LANDMARK_SMOOTHING)));
+    assert!(smoothed < 0.9 * sigma, "{smoothed} vs {sigma}");
     let expected = (noise.white_px.powi(2) + noise.correlated_px.powi(2)).sqrt();
     assert!(
         (sigma - expected).abs() < 0.15 * expected,

@@ -16,6 +16,8 @@ use visage_face::CanonicalMesh;
 use visage_fem::Weights;
 use visage_morphable::IctModel;
 
+use super::run::SmoothingArg;
+
 /// Arguments of `visage eval`.
 #[derive(Args, Debug)]
 pub struct EvalArgs {
@@ -28,7 +30,7 @@ pub struct EvalArgs {
 pub enum EvalCommand {
     /// Synthetic ICT-FaceKit sequences with known ground truth: writes OUT/results.json,
     /// results.csv, error/jitter plots (SVG) and prints a table.
-    Synthetic(SyntheticArgs),
+    Synthetic(Box<SyntheticArgs>),
     /// Real clips: the temporal model's landmarks against EMA, One-Euro, Kalman and Gaussian
     /// filters on the tracked landmarks (jitter, deviation, lag, per region); writes
     /// OUT/results.json and a jitter-against-deviation chart (SVG) per clip, prints a table.
@@ -60,6 +62,10 @@ pub struct SyntheticArgs {
     /// Master seed; the same seed gives the same results.json (timings aside).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// The simulated tracker's landmark smoothing (as `visage run --smoothing`): the
+    /// acceleration-to-noise ratio (1/s²) or `off`.
+    #[arg(long, default_value_t = SmoothingArg(Some(visage_eval::BENCHMARK_LANDMARK_SMOOTHING)))]
+    pub smoothing: SmoothingArg,
     /// Smoothness weight λ of the image-plane fusion methods (reference pixels⁴).
     #[arg(long, default_value_t = Weights::default().lambda, allow_hyphen_values = true)]
     pub lambda: f64,
@@ -104,7 +110,7 @@ pub struct SyntheticArgs {
 /// Runs `visage eval`.
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     match args.command {
-        EvalCommand::Synthetic(a) => synthetic(a),
+        EvalCommand::Synthetic(a) => synthetic(*a),
         EvalCommand::Video(a) => super::eval_video::video(a),
     }
 }
@@ -133,6 +139,7 @@ fn config(args: &SyntheticArgs) -> anyhow::Result<BenchmarkConfig> {
     c.noise = NoiseModel::preset(&args.noise)?;
     c.noise_name = args.noise.clone();
     c.seed = args.seed;
+    c.landmark_smoothing = args.smoothing.0;
     c.weights = Weights {
         lambda: args.lambda,
         mu: args.mu,
@@ -239,6 +246,7 @@ mod tests {
             frames: Some(20),
             noise: "gaussian".into(),
             seed: 3,
+            smoothing: SmoothingArg(None),
             lambda: 1.0,
             mu: 2.0,
             sweep_lambda: Vec::new(),
@@ -255,8 +263,21 @@ mod tests {
     }
 
     #[test]
+    fn the_benchmark_smooths_landmarks_as_the_pipeline_does() {
+        assert_eq!(
+            visage_eval::BENCHMARK_LANDMARK_SMOOTHING,
+            visage::DEFAULT_LANDMARK_SMOOTHING
+        );
+        assert_eq!(
+            visage_eval::BENCHMARK_LATENCY_FRAMES,
+            visage::DEFAULT_LATENCY_FRAMES
+        );
+    }
+
+    #[test]
     fn flags_become_a_validated_config() {
         let c = config(&args()).unwrap();
+        assert_eq!(c.landmark_smoothing, None);
         assert_eq!((c.sequences, c.synthesis.frames, c.seed), (3, 20, 3));
         assert_eq!((c.weights.lambda, c.weights.mu), (1.0, 2.0));
         assert_eq!(
