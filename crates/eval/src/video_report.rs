@@ -154,7 +154,7 @@ fn baselines(clip: &ClipTracks) -> Vec<(&'static str, String, bool, Track)> {
     for alpha in (4..=19).rev().map(|i| i as f64 * 0.05) {
         out.push((
             "ema",
-            format!("α {alpha}"),
+            format!("α {alpha:.2}"),
             true,
             causal(&mut Ema::new(alpha)),
         ));
@@ -373,7 +373,7 @@ pub fn stability_chart_svg(report: &ClipReport) -> String {
     )
 }
 
-/// The comparisons of several clips as a text table.
+/// The comparisons of several clips as a text table, then each output's figures per region.
 pub fn stability_table(reports: &[ClipReport]) -> String {
     let mut s = format!(
         "{:<10} {:<14} {:>7} {:>7} {:>6} {:>6} {:>11}  {}\n",
@@ -406,6 +406,25 @@ pub fn stability_table(reports: &[ClipReport]) -> String {
                 c.envelope_advantage,
                 c.same_latency_advantage
             );
+        }
+    }
+    s += "\nper region: deviation px / lag frames / jitter reduction\n";
+    for r in reports {
+        for c in &r.comparisons {
+            let Some(m) = r.methods.iter().find(|m| m.family == c.output) else {
+                continue;
+            };
+            s += &format!("{:<10} {:<14}", r.clip, c.output);
+            for g in &m.regions {
+                s += &format!(
+                    "  {} {:.3}/{:.2}/{:.2}",
+                    g.region,
+                    g.figures.deviation,
+                    g.figures.lag_frames,
+                    g.figures.reduction()
+                );
+            }
+            s += "\n";
         }
     }
     s

@@ -7,7 +7,7 @@
 //! ```
 //!
 //! Memory is flat in the clip length in streaming mode: at most `QUEUE_CAPACITY` frames wait
-//! in each queue, surface buffers travel back from the sink to the fusion for reuse, and the
+//! in each queue (and the landmark smoother's latency in the face stage), surface buffers travel back from the sink to the fusion for reuse, and the
 //! fusion step allocates nothing (face mesh). What grows is the per-frame record (a few
 //! hundred bytes a frame). Clip mode keeps every frame's right-hand side and streaming
 //! solution until the end (≈ 9 · 8 bytes per vertex and frame), then solves each face track
