@@ -13,7 +13,9 @@ use visage_fusion::{
 
 use visage_morphable::{FaceModel, FitOptions};
 
-use crate::landmark_smoothing::{DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES};
+use crate::landmark_smoothing::{
+    DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES, MAX_LATENCY_FRAMES,
+};
 use crate::{Error, Input};
 
 /// Default subdivision of the FaceMesh template for the face mesh (≈ 1.8k vertices).
@@ -181,8 +183,15 @@ impl Builder {
         self
     }
 
-    /// Checks the landmark smoothing ratio.
+    /// Checks the landmark smoothing ratio and the latency.
     pub(crate) fn checked_smoothing(&self) -> Result<Option<f64>, Error> {
+        if self.latency > MAX_LATENCY_FRAMES {
+            return Err(Error::InvalidOption {
+                name: "--latency",
+                value: self.latency.to_string(),
+                reason: "at most 30 frames (every frame waiting is held in memory)",
+            });
+        }
         match self.landmark_smoothing {
             Some(r) if !(r.is_finite() && r > 0.0) => Err(Error::InvalidOption {
                 name: "--smoothing",

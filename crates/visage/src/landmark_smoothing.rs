@@ -25,6 +25,9 @@ pub const DEFAULT_LANDMARK_SMOOTHING: f64 = 1500.0;
 /// Default latency of the landmark smoother in streaming mode, frames.
 pub const DEFAULT_LATENCY_FRAMES: usize = 1;
 
+/// The longest latency allowed, frames (the frames waiting are held in memory, images too).
+pub const MAX_LATENCY_FRAMES: usize = 30;
+
 /// The landmark smoother's latency in clip mode, frames: long enough that the estimate is the
 /// whole track's (the smoother's gains on frames further ahead are below 1 %), short enough
 /// that the frames held back stay few.

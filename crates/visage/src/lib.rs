@@ -83,7 +83,7 @@ pub use gaze::{eye_gaze, eye_look_weights, EyeGaze};
 pub use input::Input;
 pub use landmark_smoothing::{
     CLIP_LATENCY_FRAMES, DEFAULT_DISTANCE_SMOOTHING, DEFAULT_FRAME_INTERVAL_S,
-    DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES,
+    DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES, MAX_LATENCY_FRAMES,
 };
 pub use landmarks::{FaceRecord, LandmarksFrame, PoseRecord};
 pub use metrics::{

@@ -159,6 +159,14 @@ fn bad_options_are_refused_before_any_work() {
     assert!(e.to_string().contains("--fov-deg 200"), "{e}");
     let e = no_models().lambda(-1.0).build_for(&input).err().unwrap();
     assert!(e.to_string().contains("lambda"), "{e}");
+    let e = no_models().latency(1000).build_for(&input).err().unwrap();
+    assert!(e.to_string().contains("--latency 1000"), "{e}");
+    let e = no_models()
+        .landmark_smoothing(Some(-3.0))
+        .build_for(&input)
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("--smoothing -3"), "{e}");
     for (mesh, depth) in [
         (MeshKind::Model, DepthSource::Face),
         (MeshKind::Face, DepthSource::Model),
