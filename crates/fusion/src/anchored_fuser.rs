@@ -48,7 +48,7 @@
 //! the fitted distance drifts with the head's yaw when the face's shape differs from the
 //! template. With the face CNN's surface the data share that scale and nothing is needed; a
 //! depth map measures it: every frame the median ratio of sampled to template ray distances
-//! updates a running scale `s` ([`SCALE_SMOOTHING`]), and the pose used is the fitted one with
+//! updates a filtered scale `s` ([`SCALE_FILTER_RATIO`]), and the pose used is the fitted one with
 //! its translation times `s` (the template scaled about the camera centre projects exactly as
 //! before) and the template `s·C` (`s·C_k`).
 //!
@@ -64,6 +64,8 @@ use visage_fem::{
     biharmonic, cotan_laplacian, lumped_mass, mass_matrix, FusionSystem, Operators,
     StreamingSolver, SurfaceMetrics, SurfaceQuality, Weights,
 };
+
+use visage_temporal::{ConstantVelocity, TrackFilter};
 
 use crate::{ClipState, FaceDomain, FrameStatus, FusedFrame, FusionError, SurfaceFuser};
 
@@ -98,12 +100,18 @@ pub const MODEL_WEIGHTS_MAP: Weights = Weights {
     mu: 2.0,
 };
 
-/// Weight of a frame's scale measurement in the face's running scale (an exponential moving
-/// average; see [`AnchoredFuser::scale`]). The landmark fit's distance drifts with the head's
-/// yaw when the face's shape differs from the template (up to 9 % over 24 frames on the
-/// benchmark), so the scale is re-measured every frame; the average keeps the depth maps'
-/// per-frame flicker out of the head pose.
-pub const SCALE_SMOOTHING: f64 = 0.5;
+/// Acceleration-to-noise ratio (1/s², frames taken 1/30 s apart) of the constant-velocity
+/// filter on the face's scale (see [`AnchoredFuser::scale`]). The landmark fit's distance
+/// drifts with the head's yaw when the face's shape differs from the template (up to 9 % over
+/// 24 frames on the benchmark), so the scale is re-measured every frame; the filter keeps the
+/// depth maps' per-frame flicker out of the head pose and follows the drift without lag. On the
+/// quick benchmark it took the fitted model's RMSE from 1.88 to 1.51 mm and its jitter from
+/// 1.70 to 1.35 mm against the exponential average it replaced (weight 0.5; ratio 3: 1.62 mm,
+/// 1.33 mm).
+pub const SCALE_FILTER_RATIO: f64 = 30.0;
+
+/// The frame interval the scale filter assumes, seconds.
+const SCALE_FRAME_INTERVAL_S: f64 = 1.0 / 30.0;
 
 /// Where a frame's raw surface comes from.
 #[derive(Clone, Copy, Debug)]
@@ -161,8 +169,8 @@ pub struct AnchoredFuser {
     pose: RigidTransform,
     /// Face size relative to the template (1 until a depth map measures it).
     scale: f64,
-    /// Frames whose scale was measured since the last reset.
-    scale_frames: usize,
+    /// The filter the per-frame scale measurements go through.
+    scale_filter: ConstantVelocity,
     /// Scratch for the per-frame median, #V.
     ratios: Vec<f64>,
 }
@@ -220,7 +228,7 @@ impl AnchoredFuser {
             solution: vec![[0.0; 3]; n],
             pose: RigidTransform::IDENTITY,
             scale: 1.0,
-            scale_frames: 0,
+            scale_filter: ConstantVelocity::new(SCALE_FILTER_RATIO),
             ratios: Vec::with_capacity(n),
         })
     }
@@ -248,8 +256,8 @@ impl AnchoredFuser {
     }
 
     /// Measures the face's scale in this frame — the median over valid vertices of the ratio
-    /// of the depth map's ray distance to the posed frame template's — and folds it into the
-    /// running average ([`SCALE_SMOOTHING`]).
+    /// of the depth map's ray distance to the posed frame template's — and filters it
+    /// ([`SCALE_FILTER_RATIO`]).
     fn update_scale(&mut self, pose: &RigidTransform) {
         self.ratios.clear();
         for i in (0..self.domain.vertex_count()).filter(|&i| self.valid[i]) {
@@ -262,9 +270,8 @@ impl AnchoredFuser {
         }
         let mid = self.ratios.len() / 2;
         let (_, &mut median, _) = self.ratios.select_nth_unstable_by(mid, f64::total_cmp);
-        self.scale_frames += 1;
-        let alpha = SCALE_SMOOTHING.max(1.0 / self.scale_frames as f64);
-        self.scale += alpha * (median - self.scale);
+        // The first measurement after a reset is taken as it is.
+        self.scale = self.scale_filter.step(&[median], SCALE_FRAME_INTERVAL_S)[0];
     }
 
     /// Per vertex: whether the last frame had a raw sample there.
@@ -468,7 +475,7 @@ impl SurfaceFuser for AnchoredFuser {
     fn reset(&mut self) {
         self.solver.reset();
         self.scale = 1.0;
-        self.scale_frames = 0;
+        self.scale_filter.reset();
     }
 
     fn frame_quality(&mut self) -> (SurfaceQuality, SurfaceQuality) {

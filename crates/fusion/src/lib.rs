@@ -24,7 +24,7 @@ mod surface_fusion;
 
 pub use anchored_fuser::{
     AnchoredFrame, AnchoredFuser, FrameDepth, ANCHORED_WEIGHTS_FACE, ANCHORED_WEIGHTS_MAP,
-    DOMAIN_UNITS_PER_METRE, MODEL_WEIGHTS_MAP, SCALE_SMOOTHING,
+    DOMAIN_UNITS_PER_METRE, MODEL_WEIGHTS_MAP, SCALE_FILTER_RATIO,
 };
 pub use depth_sequence::{DepthSequence, SequenceSurvey, DOMAIN_MAJORITY};
 pub use error::FusionError;
