@@ -1,6 +1,8 @@
 //! The quality figures of a run, measured frame by frame: jitter with the rigid head motion
 //! removed ([`crate::rigid_jitter`]) on every vertex and on the 468 landmark points, and the
-//! landmark reprojection error, each for the fused and the raw surface.
+//! landmark reprojection error, each for the fused and the raw surface; and in the image, the
+//! second-difference jitter of the fused landmarks against the tracked ones (what the temporal
+//! model is judged by).
 
 use serde::Serialize;
 use visage_camera::Intrinsics;
@@ -27,6 +29,12 @@ pub struct QualitySummary {
     pub landmark_jitter_mm: FusedAndRaw,
     /// Mean over meshed frames of the mean landmark reprojection error (px).
     pub reprojection_px: FusedAndRaw,
+    /// RMS over frames and landmarks of the second difference ‖p(t+1) − 2p(t) + p(t−1)‖ (px)
+    /// of the fused landmarks projected into the image (`fused`) and of the tracked ones
+    /// (`raw`), over runs of consecutive meshed frames.
+    pub image_jitter_px: FusedAndRaw,
+    /// `raw / fused` image jitter: how much steadier than tracked.
+    pub image_jitter_reduction: Option<f64>,
     /// Consecutive frame pairs measured.
     pub pairs: usize,
     /// `raw / fused` vertex and landmark jitter.
@@ -42,6 +50,41 @@ pub struct QualityMeter {
     landmark_fused: JitterMeter,
     landmark_raw: JitterMeter,
     reprojection: (f64, f64, usize),
+    image_fused: SecondDifference,
+    image_tracked: SecondDifference,
+}
+
+/// Accumulates squared second differences of a point track over consecutive frames.
+#[derive(Default)]
+struct SecondDifference {
+    /// The two frames before the current one (oldest first).
+    previous: Vec<Vec<[f64; 2]>>,
+    sum: f64,
+    count: usize,
+}
+
+impl SecondDifference {
+    fn push(&mut self, points: Vec<[f64; 2]>) {
+        if let [a, b] = self.previous.as_slice() {
+            for ((p, q), r) in a.iter().zip(b).zip(&points) {
+                let d = [r[0] - 2.0 * q[0] + p[0], r[1] - 2.0 * q[1] + p[1]];
+                if d.iter().all(|v| v.is_finite()) {
+                    self.sum += d[0] * d[0] + d[1] * d[1];
+                    self.count += 1;
+                }
+            }
+            self.previous.remove(0);
+        }
+        self.previous.push(points);
+    }
+
+    fn gap(&mut self) {
+        self.previous.clear();
+    }
+
+    fn rms(&self) -> Option<f64> {
+        (self.count > 0).then(|| (self.sum / self.count as f64).sqrt())
+    }
 }
 
 impl QualityMeter {
@@ -60,6 +103,19 @@ impl QualityMeter {
         self.vertex_raw.push(raw);
         self.landmark_fused.push(fused_landmarks);
         self.landmark_raw.push(raw_landmarks);
+        self.image_fused.push(
+            fused_landmarks
+                .iter()
+                .map(|&p| {
+                    if p[2] > 0.0 {
+                        k.project(p)
+                    } else {
+                        [f64::NAN; 2]
+                    }
+                })
+                .collect(),
+        );
+        self.image_tracked.push(landmarks_px.to_vec());
         let f = reprojection_px(k, fused_landmarks, landmarks_px);
         let r = reprojection_px(k, raw_landmarks, landmarks_px);
         if let (Some(f), Some(r)) = (f, r) {
@@ -80,6 +136,8 @@ impl QualityMeter {
         ] {
             m.gap();
         }
+        self.image_fused.gap();
+        self.image_tracked.gap();
     }
 
     pub fn summary(&self) -> QualitySummary {
@@ -95,6 +153,10 @@ impl QualityMeter {
         let vertex = pair(&self.vertex_fused, &self.vertex_raw);
         let landmark = pair(&self.landmark_fused, &self.landmark_raw);
         let (sf, sr, n) = self.reprojection;
+        let image = FusedAndRaw {
+            fused: self.image_fused.rms(),
+            raw: self.image_tracked.rms(),
+        };
         QualitySummary {
             vertex_jitter_mm: vertex,
             landmark_jitter_mm: landmark,
@@ -102,6 +164,8 @@ impl QualityMeter {
                 fused: (n > 0).then(|| sf / n as f64),
                 raw: (n > 0).then(|| sr / n as f64),
             },
+            image_jitter_px: image,
+            image_jitter_reduction: ratio(image),
             pairs: self.vertex_fused.pairs(),
             vertex_jitter_reduction: ratio(vertex),
             landmark_jitter_reduction: ratio(landmark),
@@ -125,6 +189,20 @@ fn reprojection_px(k: &Intrinsics, points: &[[f64; 3]], pixels: &[[f64; 2]]) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn image_jitter_is_the_rms_second_difference_within_runs() {
+        let mut d = SecondDifference::default();
+        for x in [0.0, 1.0, 0.0, 1.0] {
+            d.push(vec![[x, 0.0]]);
+        }
+        // Second differences −2 and +2.
+        assert_eq!(d.rms(), Some(2.0));
+        d.gap();
+        d.push(vec![[50.0, 0.0]]);
+        d.push(vec![[0.0, 0.0]]);
+        assert_eq!(d.rms(), Some(2.0), "no difference spans a gap");
+    }
 
     #[test]
     fn reprojection_of_points_on_their_rays_is_zero() {

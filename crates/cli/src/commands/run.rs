@@ -306,7 +306,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         let s = &outcome.summary;
         eprintln!(
             "{} frames ({} meshed, {} without a face) → {}; {:.1} fps, CPU {:.2}, \
-             peak RSS {:.0} MiB; jitter fused {:.3} mm vs raw {:.3} mm",
+             peak RSS {:.0} MiB; landmark jitter {:.3} px, {:.2}× steadier than tracked",
             s.frames,
             s.solved + s.carried,
             s.no_face,
@@ -314,8 +314,8 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             s.fps,
             s.cpu_use.unwrap_or(0.0),
             s.peak_rss_mib.unwrap_or(0.0),
-            s.quality.vertex_jitter_mm.fused.unwrap_or(0.0),
-            s.quality.vertex_jitter_mm.raw.unwrap_or(0.0),
+            s.quality.image_jitter_px.fused.unwrap_or(0.0),
+            s.quality.image_jitter_reduction.unwrap_or(0.0),
         );
     }
     Ok(())
