@@ -202,9 +202,9 @@ fn baselines(clip: &ClipTracks) -> Vec<(&'static str, String, bool, Track)> {
     out
 }
 
-/// The upper envelope of `(deviation, reduction)` points (the best reduction at each
-/// deviation or below), linearly interpolated at `deviation`.
-fn envelope_at(points: impl Iterator<Item = (f64, f64)>, deviation: f64) -> f64 {
+/// The upper envelope of `(deviation, reduction)` points: those with a better reduction than
+/// every point of no larger deviation, by deviation.
+fn upper_envelope(points: impl Iterator<Item = (f64, f64)>) -> Vec<(f64, f64)> {
     let mut p: Vec<(f64, f64)> = points
         .filter(|p| p.0.is_finite() && p.1.is_finite())
         .collect();
@@ -215,6 +215,13 @@ fn envelope_at(points: impl Iterator<Item = (f64, f64)>, deviation: f64) -> f64 
         best = best.max(q.1);
         keep
     });
+    p
+}
+
+/// The upper envelope of `(deviation, reduction)` points, linearly interpolated at
+/// `deviation`.
+fn envelope_at(points: impl Iterator<Item = (f64, f64)>, deviation: f64) -> f64 {
+    let p = upper_envelope(points);
     match p.iter().position(|q| q.0 > deviation) {
         Some(0) => p[0].1.min(1.0),
         Some(i) => {
@@ -338,20 +345,13 @@ pub fn evaluate_clip(clip: &ClipTracks, per_frame: &str) -> ClipReport {
 pub fn stability_chart_svg(report: &ClipReport) -> String {
     let mut series = Vec::new();
     for family in ["ema", "one_euro", "kalman", "kalman_lag1", "gaussian"] {
-        let mut points: Vec<(f64, f64)> = report
-            .methods
-            .iter()
-            .filter(|m| m.family == family)
-            .map(|m| (m.face.deviation, m.reduction))
-            .collect();
-        points.sort_by(|a, b| a.0.total_cmp(&b.0));
-        // The upper envelope: the best reduction up to each deviation.
-        let mut best = f64::NEG_INFINITY;
-        points.retain(|p| {
-            let keep = p.1 > best;
-            best = best.max(p.1);
-            keep
-        });
+        let points = upper_envelope(
+            report
+                .methods
+                .iter()
+                .filter(|m| m.family == family)
+                .map(|m| (m.face.deviation, m.reduction)),
+        );
         series.push(XySeries {
             name: family.replace('_', " "),
             points,

@@ -33,10 +33,33 @@ pub const MAX_LATENCY_FRAMES: usize = 30;
 /// that the frames held back stay few.
 pub const CLIP_LATENCY_FRAMES: usize = 8;
 
+/// The time of a filter's last frame.
+#[derive(Default)]
+struct FrameClock {
+    last_s: Option<f64>,
+}
+
+impl FrameClock {
+    /// The interval from the last frame to the frame at `time_s` (seconds; `None`, or a time
+    /// not after the last: one default interval): 0 on the first frame.
+    fn step(&mut self, time_s: Option<f64>) -> f64 {
+        let dt = match (time_s, self.last_s) {
+            (Some(t), Some(last)) if t > last => t - last,
+            (_, Some(_)) => DEFAULT_FRAME_INTERVAL_S,
+            (_, None) => 0.0,
+        };
+        self.last_s = Some(match (time_s, self.last_s) {
+            (Some(t), _) => t,
+            (None, last) => last.map_or(0.0, |l| l + dt),
+        });
+        dt
+    }
+}
+
 /// The landmark smoother and the time of its last frame.
 pub(crate) struct LandmarkSmoother {
     smoother: FixedLagSmoother,
-    last_time_s: Option<f64>,
+    clock: FrameClock,
     scratch: Vec<f64>,
 }
 
@@ -50,7 +73,7 @@ impl LandmarkSmoother {
     pub fn new(accel_ratio: f64, latency: usize) -> Self {
         LandmarkSmoother {
             smoother: FixedLagSmoother::new(accel_ratio, latency),
-            last_time_s: None,
+            clock: FrameClock::default(),
             scratch: Vec::new(),
         }
     }
@@ -66,15 +89,7 @@ impl LandmarkSmoother {
     /// after the last); returns the smoothed landmarks of the frame `latency` frames back,
     /// once there is one.
     pub fn push(&mut self, points: &[[f32; 3]], time_s: Option<f64>) -> Option<Vec<[f32; 3]>> {
-        let dt = match (time_s, self.last_time_s) {
-            (Some(t), Some(last)) if t > last => t - last,
-            (_, Some(_)) => DEFAULT_FRAME_INTERVAL_S,
-            (_, None) => 0.0,
-        };
-        self.last_time_s = Some(match (time_s, self.last_time_s) {
-            (Some(t), _) => t,
-            (None, last) => last.map_or(0.0, |l| l + dt),
-        });
+        let dt = self.clock.step(time_s);
         self.scratch.clear();
         self.scratch
             .extend(points.iter().flat_map(|p| p.map(f64::from)));
@@ -84,7 +99,7 @@ impl LandmarkSmoother {
     /// The smoothed landmarks of the frames not given out yet, oldest first; then starts
     /// afresh (a cut, a lost face, the end).
     pub fn finish(&mut self) -> Vec<Vec<[f32; 3]>> {
-        self.last_time_s = None;
+        self.clock = FrameClock::default();
         self.smoother
             .finish()
             .iter()
@@ -103,29 +118,21 @@ pub const DEFAULT_DISTANCE_SMOOTHING: f64 = 30.0;
 /// it in the image.
 pub(crate) struct DistanceSmoother {
     filter: ConstantVelocity,
-    last_time_s: Option<f64>,
+    clock: FrameClock,
 }
 
 impl DistanceSmoother {
     pub fn new(accel_ratio: f64) -> Self {
         DistanceSmoother {
             filter: ConstantVelocity::new(accel_ratio),
-            last_time_s: None,
+            clock: FrameClock::default(),
         }
     }
 
     /// Scales the fit about the camera centre to the filtered distance of the frame at
     /// `time_s`.
     pub fn smooth(&mut self, geometry: &mut FaceGeometry, time_s: Option<f64>) {
-        let dt = match (time_s, self.last_time_s) {
-            (Some(t), Some(last)) if t > last => t - last,
-            (_, Some(_)) => DEFAULT_FRAME_INTERVAL_S,
-            (_, None) => 0.0,
-        };
-        self.last_time_s = Some(match (time_s, self.last_time_s) {
-            (Some(t), _) => t,
-            (None, last) => last.map_or(0.0, |l| l + dt),
-        });
+        let dt = self.clock.step(time_s);
         let z = geometry.pose.translation[2];
         let filtered = self.filter.step(&[z], dt)[0];
         if !(z > 0.0 && filtered > 0.0) {
@@ -145,7 +152,7 @@ impl DistanceSmoother {
     /// Starts afresh (a cut, a lost face).
     pub fn reset(&mut self) {
         self.filter.reset();
-        self.last_time_s = None;
+        self.clock = FrameClock::default();
     }
 }
 
