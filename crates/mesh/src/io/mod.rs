@@ -1,4 +1,4 @@
-//! Mesh readers and writers (PLY, OBJ) shared by every stage of visage.
+//! Mesh readers and writers (PLY, OBJ and its MTL, PC2 point caches) shared by every stage of visage.
 //!
 //! Both formats keep positions in the file's units (visage writes metres in camera
 //! coordinates); colours in files are sRGB-encoded, in [`crate::TriMesh`] linear ([`crate::color`]). Errors name the
@@ -7,10 +7,15 @@
 
 mod error;
 mod obj;
+mod pc2;
 mod ply;
 
 pub use error::MeshIoError;
-pub use obj::{read_obj, read_obj_with, write_obj, ObjMesh, ObjReadOptions};
+pub use obj::{
+    read_obj, read_obj_with, write_mtl, write_obj, write_obj_with, ObjMaterial, ObjMesh,
+    ObjReadOptions,
+};
+pub use pc2::{read_pc2, Pc2Writer, PointCache};
 pub use ply::{read_ply, write_ply, write_ply_with, PlyFormat, MAX_POLYGON_CORNERS};
 
 use std::path::Path;

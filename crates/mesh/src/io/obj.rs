@@ -375,6 +375,24 @@ pub fn read_obj_with(path: &Path, options: &ObjReadOptions) -> Result<ObjMesh, M
 /// when present, and `f a/a/a b/b/b c/c/c` with one shared index per corner. Numbers use the
 /// shortest decimal form that reads back to the same `f64`.
 pub fn write_obj(path: &Path, mesh: &TriMesh) -> Result<(), MeshIoError> {
+    write_obj_with(path, mesh, None)
+}
+
+/// A material an OBJ file refers to: `mtllib LIBRARY` and `usemtl NAME` before the faces.
+#[derive(Clone, Copy, Debug)]
+pub struct ObjMaterial<'a> {
+    /// The `.mtl` file, relative to the OBJ.
+    pub library: &'a str,
+    /// The material's name in it.
+    pub name: &'a str,
+}
+
+/// [`write_obj`], with a material for the faces.
+pub fn write_obj_with(
+    path: &Path,
+    mesh: &TriMesh,
+    material: Option<ObjMaterial<'_>>,
+) -> Result<(), MeshIoError> {
     let nv = mesh.vertices.len();
     for (name, len) in [
         ("normals", mesh.normals.len()),
@@ -414,6 +432,9 @@ pub fn write_obj(path: &Path, mesh: &TriMesh) -> Result<(), MeshIoError> {
     for n in &mesh.normals {
         writeln!(w, "vn {} {} {}", n[0], n[1], n[2]).map_err(io)?;
     }
+    if let Some(m) = material {
+        writeln!(w, "mtllib {}\nusemtl {}", m.library, m.name).map_err(io)?;
+    }
     let (has_uv, has_n) = (!mesh.uvs.is_empty(), !mesh.normals.is_empty());
     for t in &mesh.triangles {
         let c = t.map(|i| {
@@ -428,6 +449,23 @@ pub fn write_obj(path: &Path, mesh: &TriMesh) -> Result<(), MeshIoError> {
         writeln!(w, "f {} {} {}", c[0], c[1], c[2]).map_err(io)?;
     }
     w.flush().map_err(io)
+}
+
+/// Writes a one-material `.mtl` file: a matte surface, its diffuse colour from `texture`
+/// (a path relative to the `.mtl`) when given, else light grey.
+///
+/// # Errors
+/// The file cannot be written.
+pub fn write_mtl(path: &Path, name: &str, texture: Option<&str>) -> Result<(), MeshIoError> {
+    let mut text =
+        format!("# visage\nnewmtl {name}\nKa 0 0 0\nKd 0.8 0.8 0.8\nKs 0 0 0\nNs 1\nillum 1\n");
+    if let Some(t) = texture {
+        text.push_str(&format!("map_Kd {t}\n"));
+    }
+    std::fs::write(path, text).map_err(|source| MeshIoError::Io {
+        path: path.to_owned(),
+        source,
+    })
 }
 
 #[cfg(test)]
@@ -602,5 +640,28 @@ mod tests {
             3
         );
         assert!(read_obj(&path).is_err());
+    }
+
+    #[test]
+    fn a_material_is_named_before_the_faces_and_reads_back() {
+        let tmp = tempfile::tempdir().unwrap();
+        let mut mesh = TriMesh::new(
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            vec![[0, 1, 2]],
+        );
+        mesh.uvs = vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+        let path = tmp.path().join("m.obj");
+        let material = ObjMaterial {
+            library: "m.mtl",
+            name: "face",
+        };
+        write_obj_with(&path, &mesh, Some(material)).unwrap();
+        write_mtl(&tmp.path().join("m.mtl"), "face", Some("texture.png")).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let at = |needle: &str| text.find(needle).unwrap();
+        assert!(at("mtllib m.mtl") < at("usemtl face") && at("usemtl face") < at("f 1/1"));
+        assert_eq!(read_obj(&path).unwrap(), mesh);
+        let mtl = std::fs::read_to_string(tmp.path().join("m.mtl")).unwrap();
+        assert!(mtl.contains("newmtl face") && mtl.contains("map_Kd texture.png"));
     }
 }
