@@ -21,7 +21,8 @@ pub const NUM_TRIANGLES: usize = 898;
 pub struct CanonicalMesh {
     /// 468 vertices, one per FaceMesh landmark (same index).
     pub vertices: Vec<[f64; 3]>,
-    /// Texture coordinates in [0, 1]² (MediaPipe's UV layout, v down).
+    /// Texture coordinates in [0, 1]², MediaPipe's UV layout with v up (OBJ's and the
+    /// renderer's convention; the metadata stores v down).
     pub uvs: Vec<[f64; 2]>,
     /// 898 triangles.
     pub triangles: Vec<[u32; 3]>,
@@ -167,9 +168,10 @@ impl CanonicalMesh {
             .chunks_exact(5)
             .map(|v| [v[0] as f64 * 0.01, -v[1] as f64 * 0.01, -v[2] as f64 * 0.01])
             .collect();
+        // The metadata's v runs down the texture image; visage's (OBJ's) runs up.
         let uvs = floats
             .chunks_exact(5)
-            .map(|v| [v[3] as f64, v[4] as f64])
+            .map(|v| [v[3] as f64, 1.0 - v[4] as f64])
             .collect();
         let triangles = indices
             .chunks_exact(3)

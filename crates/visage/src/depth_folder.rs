@@ -98,7 +98,8 @@ pub fn fuse_depth_folder(
         clip: None,
         clip_ms: None,
     };
-    let mut out = OutputDir::create(out, save_raw, PlyFormat::BinaryLittleEndian)?;
+    let mut out =
+        OutputDir::create(out)?.with_ply(PlyFormat::BinaryLittleEndian, true, save_raw)?;
     let mut run = DepthRun {
         sequence,
         fuser: ImagePlaneFuser::new(setup, system, options.max_depth_m),

@@ -3,6 +3,7 @@
 //! keep.
 
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 use visage_video::{focal_length_35mm, is_image_path, read_image, Frame, FrameSource};
 
@@ -18,6 +19,26 @@ pub struct Input {
     every: usize,
     max_frames: Option<usize>,
     kept: usize,
+    /// Which kept frames to copy, and where to.
+    copies: Option<(FrameFilter, KeptFrames)>,
+}
+
+/// Chooses the frames [`Input::keep_copies`] copies.
+type FrameFilter = Box<dyn FnMut(&Frame) -> bool + Send>;
+
+/// Copies of some of an input's frames, taken as they are decoded (on whichever thread decodes
+/// them) and kept for after the run — e.g. to colour a texture without decoding again.
+#[derive(Clone, Default)]
+pub struct KeptFrames(Arc<Mutex<Vec<Frame>>>);
+
+impl KeptFrames {
+    /// The frames copied so far, in input order (and forgets them).
+    pub fn take(&self) -> Vec<Frame> {
+        self.0
+            .lock()
+            .map(|mut v| std::mem::take(&mut *v))
+            .unwrap_or_default()
+    }
 }
 
 impl Input {
@@ -56,6 +77,7 @@ impl Input {
             every: 1,
             max_frames: None,
             kept: 0,
+            copies: None,
         })
     }
 
@@ -89,6 +111,16 @@ impl Input {
         }
         self.max_frames = Some(max_frames);
         Ok(self)
+    }
+
+    /// Copies every kept frame `select` chooses into `into` as it is decoded.
+    pub fn keep_copies(
+        mut self,
+        select: impl FnMut(&Frame) -> bool + Send + 'static,
+        into: KeptFrames,
+    ) -> Input {
+        self.copies = Some((Box::new(select), into));
+        self
     }
 
     pub fn path(&self) -> &Path {
@@ -149,6 +181,13 @@ impl Input {
                 continue;
             }
             self.kept += 1;
+            if let Some((select, into)) = &mut self.copies {
+                if select(&frame) {
+                    if let Ok(mut v) = into.0.lock() {
+                        v.push(frame.clone());
+                    }
+                }
+            }
             return Some(Ok(Decoded { frame, decode_ms }));
         }
     }

@@ -80,7 +80,7 @@ pub use config::{
 pub use depth_folder::{fuse_depth_folder, FuseOptions};
 pub use error::Error;
 pub use gaze::{eye_gaze, eye_look_weights, EyeGaze};
-pub use input::Input;
+pub use input::{Input, KeptFrames};
 pub use landmark_smoothing::{
     CLIP_LATENCY_FRAMES, DEFAULT_DISTANCE_SMOOTHING, DEFAULT_FRAME_INTERVAL_S,
     DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES, MAX_LATENCY_FRAMES,
@@ -90,7 +90,10 @@ pub use metrics::{
     FrameMetrics, FrameQuality, FrameStatus, MeshSummary, Percentiles, PoseMetrics, Report,
     RunStatus, RunSummary, RunTiming, SolverSummary, StageTimes,
 };
-pub use output::{OutputDir, DEFAULT_TIMECODE_FPS};
+pub use output::{
+    camera_to_blender, camera_to_y_up, OutputDir, CACHE_MATERIAL, CACHE_MATERIAL_FILE,
+    CACHE_MESH_FILE, DEFAULT_TIMECODE_FPS, POINT_CACHE_FILE,
+};
 pub use pipeline::QUEUE_CAPACITY;
 pub use quality::{FusedAndRaw, QualitySummary};
 pub use reconstructor::{error_chain, FrameResult, Identity, Reconstructor, RunOutcome};

@@ -1,14 +1,19 @@
-//! [`OutputDir`]: a run's results as files — `meshes/NNNNNN.ply` (and `raw/`), a streamed
-//! `landmarks.json`, `camera.json` and `metrics.json`. Every file appears complete or not at
-//! all (written under a temporary name, then renamed); `landmarks.json` is valid JSON with the
-//! frames so far even after a failure.
+//! [`OutputDir`]: a run's results as files — the surface per frame as a point cache
+//! (`sequence.pc2` with `mesh.obj` and `mesh.mtl`, the layout Blender's Mesh Cache modifier
+//! plays) and/or `meshes/NNNNNN.ply` (and `raw/`), a streamed `landmarks.json`, `camera.json`
+//! and `metrics.json`. Every file appears complete or not at all (written under a temporary
+//! name, then renamed); `landmarks.json` is valid JSON with the frames so far even after a
+//! failure.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use visage_camera::Intrinsics;
-use visage_mesh::io::{write_obj, write_ply_with, PlyFormat};
+use visage_mesh::io::{
+    read_pc2, write_mtl, write_obj, write_obj_with, write_ply_with, MeshIoError, ObjMaterial,
+    Pc2Writer, PlyFormat,
+};
 use visage_mesh::TriMesh;
 
 use crate::animation::{BlendshapeFrame, BlendshapesJsonWriter, LiveLinkCsvWriter};
@@ -21,35 +26,106 @@ use crate::Error;
 /// An output folder being written.
 pub struct OutputDir {
     dir: PathBuf,
-    save_raw: bool,
-    format: PlyFormat,
+    /// PLY per frame: the format, and whether the fused and the raw surfaces are wanted.
+    ply: Option<(PlyFormat, bool, bool)>,
+    /// The point cache, once its first frame came (or `Pending` until then).
+    cache: PointCacheState,
     /// `landmarks.json.tmp` while the run goes on, and whether a frame was written yet.
     landmarks: Option<(BufWriter<File>, bool)>,
     blendshapes: Option<(LiveLinkCsvWriter, BlendshapesJsonWriter)>,
     mesh: TriMesh,
+    /// Input indices of every frame so far (from the landmarks records).
+    frames: Vec<usize>,
+    /// One frame's surface in Blender's coordinates.
+    blender: Vec<[f64; 3]>,
+}
+
+/// `sequence.pc2` being written: one sample per meshed frame as they come; frames without a
+/// mesh get the held surface when the cache is finished.
+enum PointCacheState {
+    Off,
+    Pending,
+    Writing {
+        writer: Pc2Writer,
+        /// Input indices of the frames written, in order.
+        meshed: Vec<usize>,
+    },
+}
+
+/// The point cache's file name in an output folder.
+pub const POINT_CACHE_FILE: &str = "sequence.pc2";
+/// The point cache's mesh (topology, UVs, the first frame's surface).
+pub const CACHE_MESH_FILE: &str = "mesh.obj";
+/// The material library `mesh.obj` names.
+pub const CACHE_MATERIAL_FILE: &str = "mesh.mtl";
+/// The material's name in it.
+pub const CACHE_MATERIAL: &str = "face";
+
+/// Camera coordinates (x right, y down, z forward) → the y-up coordinates of OBJ and glTF
+/// files (x right, y up, the camera looking down −z): a half turn about x.
+pub fn camera_to_y_up(p: [f64; 3]) -> [f64; 3] {
+    [p[0], -p[1], -p[2]]
+}
+
+/// Camera coordinates → Blender's (z up, y forward), i.e. where Blender's OBJ importer, with
+/// its default axes (forward −Z, up Y), puts a [`camera_to_y_up`] point: what the Mesh Cache
+/// modifier, with its default axes, must read.
+pub fn camera_to_blender(p: [f64; 3]) -> [f64; 3] {
+    [p[0], p[2], -p[1]]
 }
 
 /// The frame rate of `blendshapes.csv`'s timecode when the input has none (an image folder).
 pub const DEFAULT_TIMECODE_FPS: f64 = 30.0;
 
 impl OutputDir {
-    /// Creates `dir/meshes/` (and `dir/raw/` with `save_raw`).
+    /// Creates the folder; no file is written until a `with_…` asks for it.
     ///
     /// # Errors
-    /// When the folders cannot be created.
-    pub fn create(dir: &Path, save_raw: bool, format: PlyFormat) -> Result<OutputDir, Error> {
-        for sub in ["meshes"].into_iter().chain(save_raw.then_some("raw")) {
-            let path = dir.join(sub);
-            std::fs::create_dir_all(&path).map_err(|source| Error::Write { path, source })?;
-        }
+    /// When the folder cannot be created.
+    pub fn create(dir: &Path) -> Result<OutputDir, Error> {
+        std::fs::create_dir_all(dir).map_err(|source| Error::Write {
+            path: dir.to_owned(),
+            source,
+        })?;
         Ok(OutputDir {
             dir: dir.to_owned(),
-            save_raw,
-            format,
+            ply: None,
+            cache: PointCacheState::Off,
             landmarks: None,
             blendshapes: None,
             mesh: TriMesh::new(Vec::new(), Vec::new()),
+            frames: Vec::new(),
+            blender: Vec::new(),
         })
+    }
+
+    /// A PLY per meshed frame: the fused surface in `meshes/` (with `fused`) and the raw one
+    /// in `raw/` (with `raw`).
+    ///
+    /// # Errors
+    /// When the folders cannot be created.
+    pub fn with_ply(
+        mut self,
+        format: PlyFormat,
+        fused: bool,
+        raw: bool,
+    ) -> Result<OutputDir, Error> {
+        for (sub, wanted) in [("meshes", fused), ("raw", raw)] {
+            if wanted {
+                let path = self.dir.join(sub);
+                std::fs::create_dir_all(&path).map_err(|source| Error::Write { path, source })?;
+            }
+        }
+        self.ply = Some((format, fused, raw));
+        Ok(self)
+    }
+
+    /// The fused surface as a point cache: `sequence.pc2` (Blender's coordinates, one sample
+    /// per processed frame, frames without a mesh holding the nearest earlier one, or the
+    /// first) beside `mesh.obj` (the first meshed frame, y up, with UVs) and `mesh.mtl`.
+    pub fn with_point_cache(mut self) -> OutputDir {
+        self.cache = PointCacheState::Pending;
+        self
     }
 
     /// Starts `landmarks.json`: the frames' landmarks records go there from now on.
@@ -121,6 +197,7 @@ impl OutputDir {
     /// Closes `landmarks.json` and the blendshape files (also after a failed run: they then
     /// hold the frames so far).
     pub fn finish(&mut self) -> Result<(), Error> {
+        self.finish_point_cache()?;
         if let Some((csv, json)) = self.blendshapes.take() {
             csv.finish()?;
             json.finish()?;
@@ -141,8 +218,73 @@ impl OutputDir {
     }
 }
 
+impl OutputDir {
+    /// Starts the point cache on the first meshed frame: `mesh.obj`, `mesh.mtl` and the cache.
+    fn start_point_cache(&mut self, vertices: &[[f64; 3]]) -> Result<(), Error> {
+        let mesh_error = |path: &Path| {
+            let path = path.to_owned();
+            move |source| Error::WriteMesh { path, source }
+        };
+        let mut mesh = self.mesh.clone();
+        mesh.vertices = vertices.iter().map(|&p| camera_to_y_up(p)).collect();
+        let material = ObjMaterial {
+            library: CACHE_MATERIAL_FILE,
+            name: CACHE_MATERIAL,
+        };
+        write_atomically(&self.dir.join(CACHE_MESH_FILE), |p| {
+            write_obj_with(p, &mesh, Some(material)).map_err(mesh_error(p))
+        })?;
+        write_atomically(&self.dir.join(CACHE_MATERIAL_FILE), |p| {
+            write_mtl(p, CACHE_MATERIAL, None).map_err(mesh_error(p))
+        })?;
+        let tmp = tmp_path(&self.dir.join(POINT_CACHE_FILE));
+        let writer = Pc2Writer::create(&tmp, vertices.len(), 0.0).map_err(mesh_error(&tmp))?;
+        self.cache = PointCacheState::Writing {
+            writer,
+            meshed: Vec::new(),
+        };
+        Ok(())
+    }
+
+    /// Closes the point cache: fills the frames without a mesh (every processed frame has a
+    /// landmarks record) and renames it into place.
+    fn finish_point_cache(&mut self) -> Result<(), Error> {
+        let PointCacheState::Writing { writer, meshed } =
+            std::mem::replace(&mut self.cache, PointCacheState::Off)
+        else {
+            return Ok(());
+        };
+        let path = self.dir.join(POINT_CACHE_FILE);
+        let tmp = tmp_path(&path);
+        let mesh_error = |source: MeshIoError| Error::WriteMesh {
+            path: tmp.clone(),
+            source,
+        };
+        writer.finish().map_err(mesh_error)?;
+        let frames = &self.frames;
+        if !frames.is_empty() && *frames != meshed {
+            let cache = read_pc2(&tmp).map_err(mesh_error)?;
+            let mut filled = Pc2Writer::create(&tmp, cache.points, 0.0).map_err(mesh_error)?;
+            let mut sample = 0;
+            let mut points = vec![[0.0; 3]; cache.points];
+            for &index in frames {
+                while sample + 1 < meshed.len() && meshed[sample + 1] <= index {
+                    sample += 1;
+                }
+                for (p, c) in points.iter_mut().zip(cache.sample(sample).chunks_exact(3)) {
+                    *p = [c[0] as f64, c[1] as f64, c[2] as f64];
+                }
+                filled.push(&points).map_err(mesh_error)?;
+            }
+            filled.finish().map_err(mesh_error)?;
+        }
+        std::fs::rename(&tmp, &path).map_err(|source| Error::Write { path, source })
+    }
+}
+
 impl FrameSink for OutputDir {
     fn landmarks(&mut self, record: &LandmarksFrame) -> Result<(), Error> {
+        self.frames.push(record.index);
         let Some((w, started)) = &mut self.landmarks else {
             return Ok(());
         };
@@ -169,14 +311,31 @@ impl FrameSink for OutputDir {
     fn mesh(&mut self, frame: &MeshFrame<'_>) -> Result<(), Error> {
         let name = format!("{:06}.ply", frame.index);
         let s = frame.surfaces;
-        let targets = [("meshes", &s.fused, true), ("raw", &s.raw, self.save_raw)];
         if self.mesh.triangles != frame.triangles {
             self.mesh.triangles = frame.triangles.to_vec();
         }
         if self.mesh.uvs != frame.uvs {
             self.mesh.uvs = frame.uvs.to_vec();
         }
-        for (sub, vertices, wanted) in targets {
+        if matches!(self.cache, PointCacheState::Pending) {
+            self.start_point_cache(&s.fused)?;
+        }
+        if let PointCacheState::Writing { writer, meshed } = &mut self.cache {
+            self.blender.clear();
+            self.blender
+                .extend(s.fused.iter().map(|&p| camera_to_blender(p)));
+            writer
+                .push(&self.blender)
+                .map_err(|source| Error::WriteMesh {
+                    path: tmp_path(&self.dir.join(POINT_CACHE_FILE)),
+                    source,
+                })?;
+            meshed.push(frame.index);
+        }
+        let Some((format, fused, raw)) = self.ply else {
+            return Ok(());
+        };
+        for (sub, vertices, wanted) in [("meshes", &s.fused, fused), ("raw", &s.raw, raw)] {
             if !wanted {
                 continue;
             }
@@ -184,7 +343,7 @@ impl FrameSink for OutputDir {
             self.mesh.vertices.extend_from_slice(vertices);
             let path = self.dir.join(sub).join(&name);
             write_atomically(&path, |p| {
-                write_ply_with(p, &self.mesh, self.format).map_err(|source| Error::WriteMesh {
+                write_ply_with(p, &self.mesh, format).map_err(|source| Error::WriteMesh {
                     path: p.to_owned(),
                     source,
                 })
