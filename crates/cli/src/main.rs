@@ -31,7 +31,9 @@ struct Cli {
 enum Command {
     /// Video or images in, a fused metric face mesh per frame out
     ///
-    /// Writes OUT/meshes/NNNNNN.ply, landmarks.json, metrics.json and camera.json. Exit
+    /// Writes OUT/sequence.pc2 with mesh.obj (every frame's surface; a PLY per frame with
+    /// --ply), landmarks.json, metrics.json, camera.json and the blendshape curves; with
+    /// --glb, --texture also those (as `visage export` makes them). Exit
     /// codes: 0 done; 2 bad input (missing or corrupt input — a broken video keeps the frames
     /// before the break —, intrinsics for another size, unwritable output, missing models);
     /// 1 internal error.
@@ -47,6 +49,11 @@ enum Command {
     /// The image-plane mesh over the pixels with depth in at least half of the frames,
     /// fused frame by frame (streaming) or over the whole clip.
     Fuse(commands::fuse::FuseArgs),
+    /// Make the animated glTF and the face texture from a run's output folder
+    ///
+    /// Reads OUT/sequence.pc2, mesh.obj, camera.json, metrics.json and blendshapes.json, and
+    /// the input again for the texture. Without flags: everything.
+    Export(commands::export::ExportCommandArgs),
     /// Time the factor-once solver at several mesh sizes (JSON)
     BenchSolver(commands::bench_solver::BenchSolverArgs),
     /// Render a mesh to a colour PNG and/or a 16-bit depth PNG
@@ -75,6 +82,7 @@ fn main() -> ExitCode {
         Command::Run(args) => commands::run::run(args),
         Command::Bench(args) => commands::bench::run(args),
         Command::Fuse(args) => commands::fuse::run(args),
+        Command::Export(args) => commands::export::run(args),
         Command::BenchSolver(args) => commands::bench_solver::run(args),
         Command::Render(args) => commands::render::run(args),
         Command::Landmarks(args) => commands::landmarks::run(args),

@@ -38,6 +38,7 @@ fn run_five_frames(clip: &Path, models: &Path, out: &Path, extra: &[&str]) {
         "--max-frames",
         "5",
         "--quiet",
+        "--ply",
         "--models",
         s(models),
     ];
@@ -73,6 +74,7 @@ fn a_short_clip_gives_a_mesh_landmarks_and_metrics_per_frame() {
         "8",
         "--save-raw",
         "--quiet",
+        "--ply",
         "--models",
         s(&models),
     ]);
@@ -244,6 +246,7 @@ fn a_truncated_video_keeps_the_readable_frames_and_names_the_break() {
         "--out",
         s(&out),
         "--quiet",
+        "--ply",
         "--models",
         s(&models),
     ]);
@@ -294,6 +297,7 @@ fn a_frame_without_a_face_gets_no_mesh_and_tracking_reacquires() {
         "--out",
         s(&out),
         "--quiet",
+        "--ply",
         "--models",
         s(&models),
     ]);
@@ -308,6 +312,11 @@ fn a_frame_without_a_face_gets_no_mesh_and_tracking_reacquires() {
     assert_eq!(m["summary"]["no_face"], 1);
     assert!(!out.join("meshes/000002.ply").exists());
     assert!(out.join("meshes/000003.ply").exists());
+    // The point cache has a sample for every frame: the faceless one holds the one before.
+    let cache = visage_mesh::io::read_pc2(&out.join("sequence.pc2")).unwrap();
+    assert_eq!(cache.samples(), 5);
+    assert_eq!(cache.sample(2), cache.sample(1));
+    assert_ne!(cache.sample(3), cache.sample(2));
 }
 
 #[test]

@@ -11,7 +11,8 @@
 //! fn parity() { let dir = visage_testdata::shared_dir(); … }
 //! ```
 //!
-//! The switches are `shared_data`, `model_files` and `ffmpeg`. Under `CI=true` all three are
+//! The switches are `shared_data`, `model_files`, `ffmpeg` and `web_tools` (the glTF validator,
+//! the report viewer's bundle and Chromium: `web/viewer/build.sh`). Under `CI=true` all are
 //! on whatever is present, so a missing input fails its tests instead of skipping them (CI
 //! always has them). The build script re-runs when `CI`, `VISAGE_MODELS` or
 //! `VISAGE_TEST_DATA` change; `scripts/test.sh` sets the last to what is present, so fetching
@@ -66,6 +67,23 @@ pub fn has_ffmpeg() -> bool {
     })
 }
 
+/// The browser-side tools (`web/viewer`): its node modules, its bundle and Debian's Chromium.
+pub fn web_dir() -> PathBuf {
+    workspace_root().join("web/viewer")
+}
+
+/// Whether `web/viewer` is built (`web/viewer/build.sh`) and Chromium is installed — what the
+/// glTF validator and the report's browser test need.
+pub fn has_web_tools() -> bool {
+    let web = web_dir();
+    web.join("node_modules/gltf-validator").is_dir()
+        && web.join("dist/viewer.js").is_file()
+        && Path::new(CHROMIUM).is_file()
+}
+
+/// The browser the report's test drives.
+pub const CHROMIUM: &str = "/usr/bin/chromium";
+
 /// For build scripts: declares the switches and turns on those whose input is present (all of
 /// them under `CI=true`).
 pub fn emit_cfgs() {
@@ -73,11 +91,16 @@ pub fn emit_cfgs() {
         println!("cargo::rerun-if-env-changed={var}");
     }
     println!("cargo::rerun-if-changed=build.rs");
+    println!(
+        "cargo::rerun-if-changed={}",
+        web_dir().join("dist/viewer.js").display()
+    );
     let ci = std::env::var("CI").is_ok_and(|v| v == "true" || v == "1");
     let switches = [
         ("shared_data", has_shared_data()),
         ("model_files", has_model_files()),
         ("ffmpeg", has_ffmpeg()),
+        ("web_tools", has_web_tools()),
     ];
     for (name, present) in switches {
         println!("cargo::rustc-check-cfg=cfg({name})");

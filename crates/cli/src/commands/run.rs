@@ -14,10 +14,11 @@ use clap::{Args, ValueEnum};
 use indicatif::ProgressBar;
 use visage::{
     BlendshapeFrame, Camera, DepthKind, DepthSequence, DepthSource, FrameMetrics, FrameSink, Input,
-    Intrinsics, LandmarksFrame, MeshFrame, MeshKind, ModelSource, OutputDir, PlyFormat,
+    Intrinsics, KeptFrames, LandmarksFrame, MeshFrame, MeshKind, ModelSource, OutputDir, PlyFormat,
     Reconstructor, TemporalMode, DEFAULT_SUBDIVISION,
 };
 
+use crate::commands::export::{exports_into, print_summary, ExportArgs};
 use crate::progress::progress_bar;
 
 /// Mesh design.
@@ -142,16 +143,22 @@ pub struct PipelineArgs {
 pub struct RunArgs {
     #[command(flatten)]
     pub pipeline: PipelineArgs,
-    /// Output folder: meshes/NNNNNN.ply, raw/ (with --save-raw), landmarks.json, metrics.json,
-    /// camera.json (the intrinsics used).
+    /// Output folder: sequence.pc2 with mesh.obj and mesh.mtl (every frame's surface),
+    /// landmarks.json, metrics.json, camera.json (the intrinsics used), the blendshape
+    /// curves; meshes/NNNNNN.ply with --ply.
     #[arg(long)]
     pub out: PathBuf,
-    /// Also write the raw (unfused) surface on the same mesh to OUT/raw/.
+    /// Also write a PLY per frame to OUT/meshes/.
+    #[arg(long)]
+    pub ply: bool,
+    /// Also write the raw (unfused) surface on the same mesh to OUT/raw/ (PLY per frame).
     #[arg(long)]
     pub save_raw: bool,
     /// Write ASCII PLY instead of binary.
     #[arg(long)]
     pub ascii: bool,
+    #[command(flatten)]
+    pub exports: ExportArgs,
 }
 
 impl PipelineArgs {
@@ -268,13 +275,22 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let p = &args.pipeline;
     std::fs::metadata(&p.input)
         .with_context(|| format!("{}: cannot read the input", p.input.display()))?;
-    let (input, reconstructor) = p.open()?;
+    let (mut input, reconstructor) = p.open()?;
+    // The frames the texture is fused from, kept as they are decoded (no second decode).
+    let kept = KeptFrames::default();
+    if args.exports.any() {
+        let select = visage_export::texture_frames(input.frame_rate());
+        input = input.keep_copies(select, kept.clone());
+    }
     let format = if args.ascii {
         PlyFormat::Ascii
     } else {
         PlyFormat::BinaryLittleEndian
     };
-    let mut out = OutputDir::create(&args.out, args.save_raw, format)?.with_landmarks()?;
+    let mut out = OutputDir::create(&args.out)?
+        .with_ply(format, args.ply, args.save_raw)?
+        .with_point_cache()
+        .with_landmarks()?;
     if !p.no_fit {
         out = out.with_blendshapes(input.frame_rate())?;
     }
@@ -301,6 +317,12 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             outcome.frames.len(),
             args.out.display()
         )));
+    }
+    if args.exports.any() {
+        let summary = exports_into(&args.out, &args.exports, Some(&kept.take()))?;
+        if !p.quiet {
+            print_summary(&args.out, &summary);
+        }
     }
     if !p.quiet {
         let s = &outcome.summary;

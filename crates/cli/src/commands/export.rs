@@ -1,0 +1,93 @@
+//! `visage export`: the files people open, made from a run's output folder — the animated
+//! glTF, the fused face texture — and the flags `visage run` shares to make them at once.
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use visage_export::{export, ExportOptions, ExportSummary};
+
+/// The exports `visage run` can make after the run (`visage export` makes them later).
+#[derive(Args, Debug, Default)]
+pub struct ExportArgs {
+    /// Write OUT/sequence.glb: the face mesh with its texture, animated (morph targets and
+    /// head motion) at the video's frame times — for Blender, Unreal, Unity, three.js.
+    #[arg(long)]
+    pub glb: bool,
+    /// Write OUT/texture.png: the face's colour fused from the frames (mesh.mtl names it).
+    #[arg(long)]
+    pub texture: bool,
+}
+
+impl ExportArgs {
+    /// Whether any export is asked for.
+    pub fn any(&self) -> bool {
+        self.glb || self.texture
+    }
+
+    fn options(&self) -> ExportOptions {
+        ExportOptions {
+            glb: self.glb,
+            texture: self.texture,
+        }
+    }
+}
+
+/// Arguments of `visage export`.
+#[derive(Args, Debug)]
+pub struct ExportCommandArgs {
+    /// A `visage run` output folder (its sequence.pc2, mesh.obj, camera.json, metrics.json;
+    /// the input it names is read again for the texture).
+    pub dir: PathBuf,
+    #[command(flatten)]
+    pub exports: ExportArgs,
+    /// No summary line.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Runs `visage export` (everything when no export is named).
+pub fn run(args: ExportCommandArgs) -> anyhow::Result<()> {
+    let mut exports = args.exports;
+    if !exports.any() {
+        exports = ExportArgs {
+            glb: true,
+            texture: true,
+        };
+    }
+    let summary = exports_into(&args.dir, &exports, None)?;
+    if !args.quiet {
+        print_summary(&args.dir, &summary);
+    }
+    Ok(())
+}
+
+/// Makes the exports `args` asks for in `dir`.
+pub fn exports_into(
+    dir: &Path,
+    args: &ExportArgs,
+    frames: Option<&[visage_video::Frame]>,
+) -> anyhow::Result<ExportSummary> {
+    Ok(export(dir, &args.options(), frames)?)
+}
+
+/// One line per file written, with its size and time.
+pub fn print_summary(dir: &Path, summary: &ExportSummary) {
+    for f in &summary.files {
+        eprintln!(
+            "{}: {:.2} MB in {:.0} ms",
+            dir.join(&f.file).display(),
+            f.bytes as f64 / 1e6,
+            f.ms
+        );
+    }
+    if let (Some(rms), Some(max)) = (summary.glb_rms_error_m, summary.glb_max_error_m) {
+        eprintln!(
+            "sequence.glb: {} morph targets ({} ARKit), {:.3} mm RMS from the point cache \
+             (largest {:.3} mm)",
+            summary.named_targets + summary.residual_targets,
+            summary.named_targets,
+            rms * 1e3,
+            max * 1e3
+        );
+    }
+}

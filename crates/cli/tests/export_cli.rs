@@ -1,0 +1,262 @@
+//! The files people open: the point cache plays the PLYs' surfaces in Blender's axes, the glb
+//! plays them back (morph targets and head motion) within a fraction of a millimetre and passes
+//! the Khronos validator, `visage export` remakes them from the folder, and a folder that is
+//! not a run's is a clear error.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn visage(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_visage"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn run_ok(args: &[&str]) -> String {
+    let o = visage(args);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{args:?}: {err}");
+    err
+}
+
+/// A 12-frame run with PLYs and the exports, into `out`.
+fn run_with_exports(out: &Path) {
+    let models = visage_testdata::require(visage_testdata::models_dir());
+    let clip =
+        visage_testdata::require(visage_testdata::shared_dir().join("data/video/lp_d18.mp4"));
+    run_ok(&[
+        "run",
+        s(&clip),
+        "--out",
+        s(out),
+        "--max-frames",
+        "12",
+        "--ply",
+        "--glb",
+        "--models",
+        s(&models),
+    ]);
+}
+
+/// A glb's JSON and binary chunks.
+fn read_glb(path: &Path) -> (Value, Vec<u8>) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[..4], b"glTF");
+    let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+    assert_eq!(word(4), 2, "glTF version");
+    assert_eq!(word(8), bytes.len(), "declared length");
+    let json_len = word(12);
+    assert_eq!(&bytes[16..20], b"JSON");
+    let json: Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    let bin_at = 20 + json_len;
+    assert_eq!(&bytes[bin_at + 4..bin_at + 8], b"BIN\0");
+    let bin = bytes[bin_at + 8..bin_at + 8 + word(bin_at)].to_vec();
+    (json, bin)
+}
+
+/// An accessor's floats (tightly packed float accessors only, as visage writes them).
+fn floats(json: &Value, bin: &[u8], accessor: usize) -> Vec<f32> {
+    let a = &json["accessors"][accessor];
+    assert_eq!(a["componentType"], 5126);
+    let width = match a["type"].as_str().unwrap() {
+        "SCALAR" => 1,
+        "VEC2" => 2,
+        "VEC3" => 3,
+        "VEC4" => 4,
+        t => panic!("{t}"),
+    };
+    let view = &json["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+    let start = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let n = a["count"].as_u64().unwrap() as usize * width;
+    bin[start..start + 4 * n]
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+        .collect()
+}
+
+/// Rotates `v` by the unit quaternion `[x, y, z, w]`.
+fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
+    let [x, y, z, w] = q;
+    let m = [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - z * w),
+            2.0 * (x * z + y * w),
+        ],
+        [
+            2.0 * (x * y + z * w),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - x * w),
+        ],
+        [
+            2.0 * (x * z - y * w),
+            2.0 * (y * z + x * w),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ];
+    std::array::from_fn(|i| (0..3).map(|j| m[i][j] * v[j]).sum())
+}
+
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn the_point_cache_and_the_glb_play_the_fused_surfaces() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    run_with_exports(&out);
+
+    // Point cache: Blender's axes (x, z, −y) of each frame's PLY; mesh.obj is frame 0, y up.
+    let cache = visage_mesh::io::read_pc2(&out.join("sequence.pc2")).unwrap();
+    assert_eq!(cache.samples(), 12);
+    let plys: Vec<Vec<[f64; 3]>> = (0..12)
+        .map(|i| {
+            visage_mesh::io::read_ply(&out.join(format!("meshes/{i:06}.ply")))
+                .unwrap()
+                .vertices
+        })
+        .collect();
+    for (k, ply) in plys.iter().enumerate() {
+        for (p, c) in ply.iter().zip(cache.sample(k).chunks_exact(3)) {
+            let blender = [p[0], p[2], -p[1]];
+            for i in 0..3 {
+                assert!((blender[i] - c[i] as f64).abs() < 1e-6, "frame {k}");
+            }
+        }
+    }
+    let obj = visage_mesh::io::read_obj(&out.join("mesh.obj")).unwrap();
+    assert_eq!(obj.vertices.len(), plys[0].len());
+    assert_eq!(obj.uvs.len(), obj.vertices.len());
+    assert!((obj.vertices[1][1] + plys[0][1][1]).abs() < 1e-6);
+    let mtl = std::fs::read_to_string(out.join("mesh.mtl")).unwrap();
+    assert!(mtl.contains("map_Kd texture.png"), "{mtl}");
+    let texture = image::open(out.join("texture.png")).unwrap().to_rgb8();
+    assert!(texture.width() >= 256 && texture.width() == texture.height());
+
+    // The glb: base + Σ wᵢ targetᵢ, then the node's rotation and translation, is each frame's
+    // surface in glTF's axes (x, −y, −z).
+    let (json, bin) = read_glb(&out.join("sequence.glb"));
+    let primitive = &json["meshes"][0]["primitives"][0];
+    let targets = primitive["targets"].as_array().unwrap();
+    let names = json["meshes"][0]["extras"]["targetNames"]
+        .as_array()
+        .unwrap();
+    assert_eq!(names.len(), targets.len());
+    assert!(!targets.is_empty() && targets.len() <= 64 + 52);
+    let base = floats(
+        &json,
+        &bin,
+        primitive["attributes"]["POSITION"].as_u64().unwrap() as usize,
+    );
+    let deltas: Vec<Vec<f32>> = targets
+        .iter()
+        .map(|t| floats(&json, &bin, t["POSITION"].as_u64().unwrap() as usize))
+        .collect();
+    let animation = &json["animations"][0];
+    let sampler = |path: &str| {
+        let channel = animation["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["target"]["path"] == path)
+            .unwrap();
+        let s = &animation["samplers"][channel["sampler"].as_u64().unwrap() as usize];
+        (
+            floats(&json, &bin, s["input"].as_u64().unwrap() as usize),
+            floats(&json, &bin, s["output"].as_u64().unwrap() as usize),
+        )
+    };
+    let (times, weights) = sampler("weights");
+    let (_, translations) = sampler("translation");
+    let (_, rotations) = sampler("rotation");
+    assert_eq!(times.len(), 12);
+    assert!(
+        (times[7] as f64 - 7.0 / 30.0).abs() < 1e-3,
+        "frame times {times:?}"
+    );
+    let t = deltas.len();
+    let mut worst = 0.0f64;
+    for (k, ply) in plys.iter().enumerate() {
+        let q = std::array::from_fn(|i| rotations[4 * k + i] as f64);
+        for (v, p) in ply.iter().enumerate() {
+            let mut local: [f64; 3] = std::array::from_fn(|c| base[3 * v + c] as f64);
+            for (j, d) in deltas.iter().enumerate() {
+                for c in 0..3 {
+                    local[c] += weights[t * k + j] as f64 * d[3 * v + c] as f64;
+                }
+            }
+            let r = rotate(q, local);
+            let played: [f64; 3] = std::array::from_fn(|c| r[c] + translations[3 * k + c] as f64);
+            let expected = [p[0], -p[1], -p[2]];
+            let e = (0..3)
+                .map(|c| (played[c] - expected[c]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            worst = worst.max(e);
+        }
+    }
+    assert!(
+        worst < 1e-3,
+        "the glb plays the surfaces back within {worst} m"
+    );
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("export.json")).unwrap()).unwrap();
+    assert!((summary["glb_max_error_m"].as_f64().unwrap() - worst).abs() < 1e-4);
+
+    // `visage export` remakes them from the folder alone (decoding the input again).
+    let glb_before = std::fs::metadata(out.join("sequence.glb")).unwrap().len();
+    std::fs::remove_file(out.join("sequence.glb")).unwrap();
+    run_ok(&["export", s(&out), "--glb", "--quiet"]);
+    assert!(out.join("sequence.glb").is_file());
+    let glb_after = std::fs::metadata(out.join("sequence.glb")).unwrap().len();
+    assert!(
+        glb_after.abs_diff(glb_before) < glb_before / 10,
+        "{glb_before} vs {glb_after}"
+    );
+}
+
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg, web_tools)),
+    ignore = "needs ../shared, the model files, FFmpeg and web/viewer built (scripts/setup.sh)"
+)]
+fn the_glb_passes_the_khronos_validator_without_warnings() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    run_with_exports(&out);
+    let web = visage_testdata::web_dir();
+    let o = Command::new("node")
+        .arg(web.join("test/validate_gltf.mjs"))
+        .arg(out.join("sequence.glb"))
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{report}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let report: Value = serde_json::from_str(report.trim()).unwrap();
+    assert_eq!(report["numErrors"], 0, "{report}");
+    assert_eq!(report["numWarnings"], 0, "{report}");
+}
+
+#[test]
+fn a_folder_that_is_not_a_run_is_exit_2_naming_the_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = visage(&["export", s(tmp.path())]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("camera.json"), "{err}");
+    let missing: PathBuf = tmp.path().join("nothing_here");
+    let o = visage(&["export", s(&missing)]);
+    assert_eq!(o.status.code(), Some(2));
+}
