@@ -23,7 +23,6 @@ mod noise;
 mod normal;
 mod report;
 pub mod simulated_tracker;
-mod svg_plot;
 mod synthesis;
 mod taubin;
 mod trajectory;
@@ -48,7 +47,7 @@ pub use report::{csv, sweep_table, table, write_results, write_sweep};
 pub use simulated_tracker::{
     simulate_tracking, TrackedSequence, TrackerNoise, BENCHMARK_LATENCY_FRAMES,
 };
-pub use svg_plot::{heatmap_svg, line_chart_svg, xy_chart_svg, Series, XySeries};
+pub use visage_plot::{heatmap_svg, line_chart_svg, xy_chart_svg, Series, XySeries};
 pub use synthesis::{
     synthesize, SynthesisConfig, SyntheticFrame, SyntheticSequence, EXPRESSION_ACTIVITY,
     PIVOT_DEPTH_M,

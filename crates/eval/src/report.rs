@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::benchmark::{BenchmarkResults, SweepPoint};
-use crate::svg_plot::{heatmap_svg, line_chart_svg, Series};
+use visage_plot::{heatmap_svg, line_chart_svg, Series};
 use crate::EvalError;
 
 /// Table order of the methods (then any others, by name).

@@ -14,7 +14,7 @@ use visage_temporal::{
     TrackFilter,
 };
 
-use crate::svg_plot::{xy_chart_svg, XySeries};
+use visage_plot::{xy_chart_svg, XySeries};
 
 /// A clip's tracks: frames that follow each other with a face (segments), every frame's 468
 /// landmarks as `x, y` scalars (pixels).

@@ -1,4 +1,5 @@
-//! Small hand-written SVG charts (no plotting dependency).
+//! Small hand-written SVG charts (no plotting dependency): the benchmark's and the run
+//! report's line, x–y and heat-map charts.
 
 use std::fmt::Write as _;
 
