@@ -29,6 +29,10 @@ pub enum VideoError {
         frame: usize,
         reason: String,
     },
+    /// Encoding a video failed (`ffmpeg` refused the settings, exited with an error, or the
+    /// file could not be put in place); `reason` carries ffmpeg's own message where it gave one.
+    #[error("{}: cannot encode video: {reason}", path.display())]
+    Encode { path: PathBuf, reason: String },
     /// A folder holds no image files.
     #[error("{}: no images (.png, .jpg, .jpeg) in this folder", path.display())]
     EmptyFolder { path: PathBuf },

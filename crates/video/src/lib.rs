@@ -13,12 +13,14 @@
 //! A truncated or corrupt video yields every decodable frame, then one
 //! [`VideoError::Broken`] naming the frame index where decoding stopped.
 
+mod encoder;
 mod error;
 mod exif;
 pub mod ffmpeg;
 mod frame;
 mod source;
 
+pub use encoder::VideoWriter;
 pub use error::VideoError;
 pub use exif::{focal_length_35mm, focal_length_35mm_in};
 pub use ffmpeg::{ffmpeg_available, probe, VideoInfo, VideoReader};
