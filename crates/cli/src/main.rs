@@ -9,6 +9,7 @@
 
 mod commands;
 mod exit;
+mod interrupt;
 mod progress;
 
 use std::process::ExitCode;
@@ -33,7 +34,8 @@ enum Command {
     ///
     /// Writes OUT/sequence.pc2 with mesh.obj (every frame's surface; a PLY per frame with
     /// --ply), landmarks.json, metrics.json, camera.json and the blendshape curves; with
-    /// --glb, --texture also those (as `visage export` makes them). Exit
+    /// --glb, --texture, --plots, --report, --preview also those (as `visage export`
+    /// makes them). Exit
     /// codes: 0 done; 2 bad input (missing or corrupt input — a broken video keeps the frames
     /// before the break —, intrinsics for another size, unwritable output, missing models);
     /// 1 internal error.
@@ -49,10 +51,11 @@ enum Command {
     /// The image-plane mesh over the pixels with depth in at least half of the frames,
     /// fused frame by frame (streaming) or over the whole clip.
     Fuse(commands::fuse::FuseArgs),
-    /// Make the animated glTF and the face texture from a run's output folder
+    /// Make the animated glTF, texture, plots, report or preview video of a run's output folder
     ///
-    /// Reads OUT/sequence.pc2, mesh.obj, camera.json, metrics.json and blendshapes.json, and
-    /// the input again for the texture. Without flags: everything.
+    /// Reads OUT/sequence.pc2, mesh.obj, camera.json, metrics.json, landmarks.json and
+    /// blendshapes.json, and the input again for the texture and the preview. Without flags:
+    /// everything but the preview video.
     Export(commands::export::ExportCommandArgs),
     /// Time the factor-once solver at several mesh sizes (JSON)
     BenchSolver(commands::bench_solver::BenchSolverArgs),

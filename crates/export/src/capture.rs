@@ -90,11 +90,12 @@ impl Capture {
                 frames.len()
             )));
         }
-        // Blender's coordinates (x, z, −y) back to the camera's.
+        // The files' y-up axes (x, −y, −z) back to the camera's (a half turn is its own
+        // inverse).
         let mut surfaces = cache.positions;
         for p in surfaces.chunks_exact_mut(3) {
-            let (x, by, bz) = (p[0], p[1], p[2]);
-            p.copy_from_slice(&[x, -bz, by]);
+            p[1] = -p[1];
+            p[2] = -p[2];
         }
         mesh.vertices = first_meshed(&frames, &surfaces)
             .chunks_exact(3)
@@ -147,7 +148,8 @@ impl Capture {
     }
 }
 
-fn read_json(path: &Path) -> Result<Value, ExportError> {
+/// A JSON file, errors naming it.
+pub(crate) fn read_json(path: &Path) -> Result<Value, ExportError> {
     let text = std::fs::read_to_string(path).map_err(|source| ExportError::Read {
         path: path.to_owned(),
         source,

@@ -1,14 +1,21 @@
 //! What people open after a run, made from its output folder ([`Capture`]): the animated glTF
 //! (`sequence.glb`), the face texture fused from the frames (`texture.png`, also named by
-//! `mesh.mtl`), and the list of what was written with sizes and times (`export.json`).
+//! `mesh.mtl`), the per-frame charts (`plots/*.svg`), the offline report with its 3-D viewer
+//! (`report.html`), the preview video (`preview.mp4`), and the list of what was written with
+//! sizes and times (`export.json`).
 //!
-//! `visage run --glb` calls [`export`] on the folder it has just written; `visage export OUT`
-//! does the same for any earlier run's folder.
+//! `visage run --glb --report --preview` calls [`export`] on the folder it has just written;
+//! `visage export OUT` does the same for any earlier run's folder.
 
+mod arkit_targets;
 mod capture;
 mod error;
+mod frame_renders;
 mod glb;
 mod morph_animation;
+mod plots;
+mod preview;
+mod report;
 mod texture_fusion;
 
 use std::path::{Path, PathBuf};
@@ -24,6 +31,9 @@ pub use glb::write_glb;
 pub use morph_animation::{
     MorphAnimation, NamedTargets, MAX_RESIDUAL_TARGETS, RESIDUAL_TOLERANCE_M,
 };
+pub use plots::{run_plots, Plot};
+pub use preview::{write_preview, PreviewSummary};
+pub use report::{report_html, Render, VIEWER_JS};
 pub use texture_fusion::{fuse_texture, FusedTexture, TextureView};
 
 /// The texture's side in texels: the power of two nearest twice the face's size in the video
@@ -43,6 +53,12 @@ pub struct ExportOptions {
     pub glb: bool,
     /// `texture.png` (and `mesh.mtl` naming it); the glb uses it.
     pub texture: bool,
+    /// `plots/*.svg`.
+    pub plots: bool,
+    /// `report.html` (with the glb, the texture and the plots).
+    pub report: bool,
+    /// `preview.mp4`.
+    pub preview: bool,
 }
 
 /// One file written.
@@ -61,6 +77,8 @@ pub struct ExportSummary {
     /// The glb's morph targets: named (ARKit) and residual.
     pub named_targets: usize,
     pub residual_targets: usize,
+    /// The share of the surfaces' deformation the ARKit targets and curves explain.
+    pub named_explained: Option<f64>,
     /// The glb's vertex error against the point cache, metres.
     pub glb_rms_error_m: Option<f64>,
     pub glb_max_error_m: Option<f64>,
@@ -83,7 +101,7 @@ pub fn texture_frames(fps: Option<f64>) -> impl FnMut(&Frame) -> bool + Send + '
         let t = frame.timestamp_s.unwrap_or(frame.index as f64 / fps);
         let t0 = *first.get_or_insert(t);
         seen += 1;
-        t <= t0 + TEXTURE_SECONDS && (seen - 1) % step == 0
+        t <= t0 + TEXTURE_SECONDS && (seen - 1).is_multiple_of(step)
     }
 }
 
@@ -101,7 +119,9 @@ pub fn export(
     let start = Instant::now();
     let capture = Capture::open(dir)?;
     let mut summary = ExportSummary::default();
-    let texture_png = if options.texture || options.glb {
+    let glb_wanted = options.glb || options.report;
+    let mut texture_image = None;
+    let texture_png = if options.texture || glb_wanted {
         let t = Instant::now();
         match make_texture(&capture, frames)? {
             Some((texture, png)) => {
@@ -114,6 +134,7 @@ pub fn export(
                 summary.texture_frames = texture.frames_used;
                 summary.texture_coverage = Some(texture.coverage);
                 summary.files.push(file_entry(dir, "texture.png", t));
+                texture_image = Some(texture.image);
                 Some(png)
             }
             None => None,
@@ -121,9 +142,34 @@ pub fn export(
     } else {
         None
     };
-    if options.glb {
+    let mut glb = None;
+    if glb_wanted {
         let t = Instant::now();
-        let animation = MorphAnimation::encode(&capture, None)?;
+        let animation = MorphAnimation::encode(&capture, |base| {
+            let deltas = arkit_targets::arkit_targets(&capture, base)?;
+            let curves = capture.blendshapes.as_ref()?;
+            let order: Vec<Option<usize>> = visage::ARKIT_BLENDSHAPES
+                .iter()
+                .map(|a| curves.names.iter().position(|n| n == a))
+                .collect();
+            Some(NamedTargets {
+                names: visage::ARKIT_BLENDSHAPES
+                    .iter()
+                    .map(|s| s.to_string())
+                    .collect(),
+                deltas,
+                weights: curves
+                    .weights
+                    .iter()
+                    .map(|w| {
+                        order
+                            .iter()
+                            .map(|i| w.as_ref().zip(*i).map_or(0.0, |(w, i)| w[i]))
+                            .collect()
+                    })
+                    .collect(),
+            })
+        })?;
         let extras = serde_json::json!({
             "input": capture.input,
             "start_s": animation.start_s,
@@ -139,11 +185,49 @@ pub fn export(
             extras,
         )?;
         write_file(&dir.join("sequence.glb"), &bytes)?;
+        glb = Some(bytes);
         summary.named_targets = animation.named_targets;
+        summary.named_explained = animation.named_explained;
         summary.residual_targets = animation.targets.len() - animation.named_targets;
         summary.glb_rms_error_m = Some(animation.rms_error_m);
         summary.glb_max_error_m = Some(animation.max_error_m);
         summary.files.push(file_entry(dir, "sequence.glb", t));
+    }
+    let mut plots = Vec::new();
+    if options.plots || options.report {
+        let t = Instant::now();
+        let landmarks_path = dir.join("landmarks.json");
+        let landmarks = landmarks_path
+            .is_file()
+            .then(|| capture::read_json(&landmarks_path))
+            .transpose()?;
+        plots = run_plots(&capture, landmarks.as_ref());
+        let plot_dir = dir.join("plots");
+        std::fs::create_dir_all(&plot_dir).map_err(|source| ExportError::Write {
+            path: plot_dir.clone(),
+            source,
+        })?;
+        for p in &plots {
+            write_file(&plot_dir.join(p.file), p.svg.as_bytes())?;
+        }
+        summary.files.push(ExportedFile {
+            file: "plots/".into(),
+            bytes: plots.iter().map(|p| p.svg.len() as u64).sum(),
+            ms: t.elapsed().as_secs_f64() * 1e3,
+        });
+    }
+    if options.report {
+        let t = Instant::now();
+        let renders = frame_renders::frame_renders(&capture, texture_image.as_ref())?;
+        let viewer = VIEWER_JS.zip(glb.as_deref());
+        let html = report_html(&capture, &summary, &plots, &renders, viewer);
+        write_file(&dir.join("report.html"), html.as_bytes())?;
+        summary.files.push(file_entry(dir, "report.html", t));
+    }
+    if options.preview {
+        let t = Instant::now();
+        write_preview(&capture, &dir.join("preview.mp4"))?;
+        summary.files.push(file_entry(dir, "preview.mp4", t));
     }
     summary.total_ms = start.elapsed().as_secs_f64() * 1e3;
     let text =

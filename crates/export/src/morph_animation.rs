@@ -6,7 +6,7 @@
 //! shapes with their weight curves), explain what they can; the rest — the fused surface's
 //! per-frame residual — is encoded by its principal components: the fewest that bring the
 //! root-mean-square vertex error under [`RESIDUAL_TOLERANCE_M`] (at most
-//! [`MAX_RESIDUAL_TARGETS`]). Why this encoding: a face's deformations over a clip lie close to a
+//! [`MAX_RESIDUAL_TARGETS`]), each scaled so that its weights span [0, 1]. Why this encoding: a face's deformations over a clip lie close to a
 //! low-dimensional space, so a few dozen dense targets plus one weight per target and frame
 //! replace one target per frame (or per key frame) — the file grows with the clip by
 //! `4 × targets` bytes a frame instead of `12 × vertices`; sparse accessors do not help,
@@ -54,6 +54,9 @@ pub struct MorphAnimation {
     pub rotations: Vec<[f32; 4]>,
     /// Named targets among [`MorphAnimation::targets`].
     pub named_targets: usize,
+    /// The share of the surfaces' deformation (variance about the mean surface) the named
+    /// targets and their weights explain; negative when they add more than they explain.
+    pub named_explained: Option<f64>,
     /// Root-mean-square and largest vertex error of the encoding against the captured
     /// surfaces, metres.
     pub rms_error_m: f64,
@@ -64,11 +67,15 @@ pub struct MorphAnimation {
 const FLIP: [f64; 3] = [1.0, -1.0, -1.0];
 
 impl MorphAnimation {
-    /// Encodes the meshed frames of `capture`.
+    /// Encodes the meshed frames of `capture`; `named` may give targets for the mean
+    /// head-coordinate surface it is called with (y up, metres).
     ///
     /// # Errors
     /// No frame has a mesh.
-    pub fn encode(capture: &Capture, named: Option<&NamedTargets>) -> Result<Self, ExportError> {
+    pub fn encode(
+        capture: &Capture,
+        named: impl FnOnce(&[[f64; 3]]) -> Option<NamedTargets>,
+    ) -> Result<Self, ExportError> {
         let keys: Vec<usize> = capture.meshed().map(|(k, _)| k).collect();
         if keys.is_empty() {
             return Err(ExportError::Empty {
@@ -87,7 +94,7 @@ impl MorphAnimation {
                 }
             }
         }
-        let base: Vec<f64> = (0..3 * n)
+        let mut base: Vec<f64> = (0..3 * n)
             .map(|j| (0..keys.len()).map(|r| rows[(r, j)]).sum::<f64>() / keys.len() as f64)
             .collect();
         for r in 0..keys.len() {
@@ -98,12 +105,34 @@ impl MorphAnimation {
         let mut names = Vec::new();
         let mut targets: Vec<Vec<[f32; 3]>> = Vec::new();
         let mut weights = vec![Vec::new(); keys.len()];
-        if let Some(named) = named {
+        let base_points: Vec<[f64; 3]> = base.chunks_exact(3).map(|b| [b[0], b[1], b[2]]).collect();
+        let energy = |rows: &Mat<f64>| rows.norm_l2().powi(2);
+        let before = energy(&rows);
+        let mut named_explained = None;
+        if let Some(named) = named(&base_points) {
+            // The rest surface is the one at zero weights: the mean surface less the mean
+            // weights' shapes, so the rows keep only the weights' variation.
+            let mean_w: Vec<f64> = (0..named.deltas.len())
+                .map(|j| {
+                    keys.iter()
+                        .map(|&k| named.weights[k][j] as f64)
+                        .sum::<f64>()
+                        / keys.len() as f64
+                })
+                .collect();
+            for (delta, &m) in named.deltas.iter().zip(&mean_w) {
+                for (v, d) in delta.iter().enumerate() {
+                    for c in 0..3 {
+                        base[3 * v + c] -= m * d[c];
+                    }
+                }
+            }
             for (r, &k) in keys.iter().enumerate() {
-                for (delta, &w) in named.deltas.iter().zip(&named.weights[k]) {
+                for ((delta, &w), &m) in named.deltas.iter().zip(&named.weights[k]).zip(&mean_w) {
+                    let w = w as f64 - m;
                     for (v, d) in delta.iter().enumerate() {
                         for c in 0..3 {
-                            rows[(r, 3 * v + c)] -= w as f64 * d[c];
+                            rows[(r, 3 * v + c)] -= w * d[c];
                         }
                     }
                 }
@@ -111,25 +140,33 @@ impl MorphAnimation {
             }
             names.extend(named.names.iter().cloned());
             targets.extend(named.deltas.iter().map(|d| to_f32(d)));
+            named_explained = Some(1.0 - energy(&rows) / before.max(f64::MIN_POSITIVE));
         }
         let named_targets = names.len();
         let (components, coefficients) = principal_components(&rows, n);
         for (j, component) in components.iter().enumerate() {
-            // Weights in [−1, 1]: the target is the largest excursion along the component.
-            let scale = coefficients
+            // Weights in [0, 1] (importers such as Blender's clamp shape keys to that range):
+            // the target spans the component's range over the clip, and the rest surface sits
+            // at its lowest coefficient.
+            let (lo, hi) = coefficients
                 .iter()
-                .map(|c| c[j].abs())
-                .fold(0.0, f64::max)
-                .max(f64::MIN_POSITIVE);
+                .map(|c| c[j])
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
+                    (lo.min(c), hi.max(c))
+                });
+            let range = (hi - lo).max(f64::MIN_POSITIVE);
+            for (b, d) in base.iter_mut().zip(component) {
+                *b += lo * d;
+            }
             names.push(format!("residual_{j:02}"));
             targets.push(
                 component
                     .chunks_exact(3)
-                    .map(|d| [d[0], d[1], d[2]].map(|x| (x * scale) as f32))
+                    .map(|d| [d[0], d[1], d[2]].map(|x| (x * range) as f32))
                     .collect(),
             );
             for (r, c) in coefficients.iter().enumerate() {
-                weights[r].push((c[j] / scale) as f32);
+                weights[r].push(((c[j] - lo) / range) as f32);
             }
         }
         let base: Vec<[f32; 3]> = base
@@ -179,6 +216,7 @@ impl MorphAnimation {
             translations,
             rotations,
             named_targets,
+            named_explained,
             rms_error_m,
             max_error_m,
         })

@@ -108,7 +108,7 @@ pub fn fuse_texture(
                 let ray_len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
                 let n_len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
                 let cos = ((n[0] * p[0] + n[1] * p[1] + n[2] * p[2]) / (ray_len * n_len)).abs();
-                if !(cos >= MIN_COS) {
+                if cos.is_nan() || cos < MIN_COS {
                     return false;
                 }
                 let weight = cos * cos;

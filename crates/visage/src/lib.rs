@@ -91,8 +91,8 @@ pub use metrics::{
     RunStatus, RunSummary, RunTiming, SolverSummary, StageTimes,
 };
 pub use output::{
-    camera_to_blender, camera_to_y_up, OutputDir, CACHE_MATERIAL, CACHE_MATERIAL_FILE,
-    CACHE_MESH_FILE, DEFAULT_TIMECODE_FPS, POINT_CACHE_FILE,
+    camera_to_y_up, OutputDir, CACHE_MATERIAL, CACHE_MATERIAL_FILE, CACHE_MESH_FILE,
+    DEFAULT_TIMECODE_FPS, POINT_CACHE_FILE,
 };
 pub use pipeline::QUEUE_CAPACITY;
 pub use quality::{FusedAndRaw, QualitySummary};

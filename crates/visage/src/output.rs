@@ -36,8 +36,8 @@ pub struct OutputDir {
     mesh: TriMesh,
     /// Input indices of every frame so far (from the landmarks records).
     frames: Vec<usize>,
-    /// One frame's surface in Blender's coordinates.
-    blender: Vec<[f64; 3]>,
+    /// One frame's surface in the y-up axes.
+    y_up: Vec<[f64; 3]>,
 }
 
 /// `sequence.pc2` being written: one sample per meshed frame as they come; frames without a
@@ -61,17 +61,10 @@ pub const CACHE_MATERIAL_FILE: &str = "mesh.mtl";
 /// The material's name in it.
 pub const CACHE_MATERIAL: &str = "face";
 
-/// Camera coordinates (x right, y down, z forward) → the y-up coordinates of OBJ and glTF
+/// Camera coordinates (x right, y down, z forward) → the y-up coordinates of OBJ, PC2 and glTF
 /// files (x right, y up, the camera looking down −z): a half turn about x.
 pub fn camera_to_y_up(p: [f64; 3]) -> [f64; 3] {
     [p[0], -p[1], -p[2]]
-}
-
-/// Camera coordinates → Blender's (z up, y forward), i.e. where Blender's OBJ importer, with
-/// its default axes (forward −Z, up Y), puts a [`camera_to_y_up`] point: what the Mesh Cache
-/// modifier, with its default axes, must read.
-pub fn camera_to_blender(p: [f64; 3]) -> [f64; 3] {
-    [p[0], p[2], -p[1]]
 }
 
 /// The frame rate of `blendshapes.csv`'s timecode when the input has none (an image folder).
@@ -95,7 +88,7 @@ impl OutputDir {
             blendshapes: None,
             mesh: TriMesh::new(Vec::new(), Vec::new()),
             frames: Vec::new(),
-            blender: Vec::new(),
+            y_up: Vec::new(),
         })
     }
 
@@ -120,9 +113,12 @@ impl OutputDir {
         Ok(self)
     }
 
-    /// The fused surface as a point cache: `sequence.pc2` (Blender's coordinates, one sample
-    /// per processed frame, frames without a mesh holding the nearest earlier one, or the
-    /// first) beside `mesh.obj` (the first meshed frame, y up, with UVs) and `mesh.mtl`.
+    /// The fused surface as a point cache: `sequence.pc2` (one sample per processed frame,
+    /// frames without a mesh holding the nearest earlier one, or the first) beside `mesh.obj`
+    /// (the first meshed frame, with UVs) and `mesh.mtl`, both in the y-up axes of
+    /// [`camera_to_y_up`]. Blender's OBJ importer keeps a file's numbers in the mesh and puts
+    /// its axis change on the object, and the Mesh Cache modifier writes mesh coordinates, so
+    /// the cache holds the same numbers as the OBJ's `v` lines.
     pub fn with_point_cache(mut self) -> OutputDir {
         self.cache = PointCacheState::Pending;
         self
@@ -321,15 +317,12 @@ impl FrameSink for OutputDir {
             self.start_point_cache(&s.fused)?;
         }
         if let PointCacheState::Writing { writer, meshed } = &mut self.cache {
-            self.blender.clear();
-            self.blender
-                .extend(s.fused.iter().map(|&p| camera_to_blender(p)));
-            writer
-                .push(&self.blender)
-                .map_err(|source| Error::WriteMesh {
-                    path: tmp_path(&self.dir.join(POINT_CACHE_FILE)),
-                    source,
-                })?;
+            self.y_up.clear();
+            self.y_up.extend(s.fused.iter().map(|&p| camera_to_y_up(p)));
+            writer.push(&self.y_up).map_err(|source| Error::WriteMesh {
+                path: tmp_path(&self.dir.join(POINT_CACHE_FILE)),
+                source,
+            })?;
             meshed.push(frame.index);
         }
         let Some((format, fused, raw)) = self.ply else {

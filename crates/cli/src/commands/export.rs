@@ -16,18 +16,33 @@ pub struct ExportArgs {
     /// Write OUT/texture.png: the face's colour fused from the frames (mesh.mtl names it).
     #[arg(long)]
     pub texture: bool,
+    /// Write OUT/plots/*.svg: per-frame time by stage, frame rate, curvature, roughness,
+    /// jitter and the blendshape curves.
+    #[arg(long)]
+    pub plots: bool,
+    /// Write OUT/report.html: one page that opens offline — summary, renders, the plots and
+    /// a 3-D viewer playing the animation (also writes the glb, texture and plots).
+    #[arg(long)]
+    pub report: bool,
+    /// Write OUT/preview.mp4: the input | the shaded mesh over it | the mesh turning, side by
+    /// side (renders every frame: slower than the other exports).
+    #[arg(long)]
+    pub preview: bool,
 }
 
 impl ExportArgs {
     /// Whether any export is asked for.
     pub fn any(&self) -> bool {
-        self.glb || self.texture
+        self.glb || self.texture || self.plots || self.report || self.preview
     }
 
     fn options(&self) -> ExportOptions {
         ExportOptions {
             glb: self.glb,
             texture: self.texture,
+            plots: self.plots,
+            report: self.report,
+            preview: self.preview,
         }
     }
 }
@@ -45,13 +60,16 @@ pub struct ExportCommandArgs {
     pub quiet: bool,
 }
 
-/// Runs `visage export` (everything when no export is named).
+/// Runs `visage export` (everything but the preview video when no export is named).
 pub fn run(args: ExportCommandArgs) -> anyhow::Result<()> {
     let mut exports = args.exports;
     if !exports.any() {
         exports = ExportArgs {
+            report: true,
             glb: true,
             texture: true,
+            plots: true,
+            preview: false,
         };
     }
     let summary = exports_into(&args.dir, &exports, None)?;

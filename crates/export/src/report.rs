@@ -1,0 +1,275 @@
+//! `report.html`: one self-contained page that opens offline by double-click — the run's summary
+//! numbers, renders of a few frames, the per-frame charts and a three.js viewer playing the
+//! animated glb. Browsers refuse `fetch` and module imports from `file://` pages, so the
+//! viewer's code (one classic script bundled from `web/viewer` at build time) and the glb
+//! (base64) are inside the page.
+
+use std::fmt::Write as _;
+
+use serde_json::Value;
+
+use crate::capture::Capture;
+use crate::plots::Plot;
+use crate::ExportSummary;
+
+/// The viewer bundle (`web/viewer/dist/viewer.js`), when it was built before visage.
+#[cfg(viewer_bundle)]
+pub const VIEWER_JS: Option<&str> = Some(include_str!("../../../web/viewer/dist/viewer.js"));
+/// The viewer bundle (`web/viewer/dist/viewer.js`), when it was built before visage.
+#[cfg(not(viewer_bundle))]
+pub const VIEWER_JS: Option<&str> = None;
+
+/// A render shown in the report.
+pub struct Render {
+    pub caption: String,
+    pub png: Vec<u8>,
+}
+
+/// The page. `viewer`: the bundle and the glb, or `None` for a page without the 3-D viewer.
+pub fn report_html(
+    capture: &Capture,
+    summary: &ExportSummary,
+    plots: &[Plot],
+    renders: &[Render],
+    viewer: Option<(&str, &[u8])>,
+) -> String {
+    let m = &capture.metrics;
+    let s = &m["summary"];
+    let input = capture.input.file_name().map_or_else(
+        || capture.input.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    let mut h = String::new();
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
+         <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\
+         <title>visage — {}</title><style>{STYLE}</style></head><body>\n\
+         <h1>visage report: {}</h1>\n<p class=\"sub\">{} · {} frames · status {}</p>\n",
+        escape(&input),
+        escape(&input),
+        escape(&capture.input.display().to_string()),
+        s["frames"],
+        escape(m["status"].as_str().unwrap_or("?")),
+    );
+    h.push_str("<section><h2>Summary</h2><table>\n");
+    for (label, value) in summary_rows(m, summary) {
+        let _ = writeln!(
+            h,
+            "<tr><th>{}</th><td>{}</td></tr>",
+            escape(&label),
+            escape(&value)
+        );
+    }
+    h.push_str("</table></section>\n");
+    match viewer {
+        Some((js, glb)) => {
+            let _ = writeln!(
+                h,
+                "<section><h2>Animation</h2><p class=\"sub\">sequence.glb: the fused surface \
+                 as morph targets and head motion, with the fused texture. Drag to orbit, \
+                 scroll to zoom.</p><div id=\"visage-viewer\"></div>\
+                 <script id=\"visage-glb\" type=\"application/octet-stream\">{}</script>\
+                 </section>",
+                base64(glb)
+            );
+            // The bundle is inlined as a classic script; it must not close the tag early.
+            let js = js.replace("</script", "<\\/script");
+            let _ = writeln!(h, "<script>{js}</script>");
+        }
+        None => h.push_str(
+            "<section><h2>Animation</h2><p>This visage was built without the 3-D viewer \
+             (web/viewer/build.sh before building visage adds it).</p></section>\n",
+        ),
+    }
+    if !renders.is_empty() {
+        h.push_str("<section><h2>Frames</h2><div class=\"grid\">\n");
+        for r in renders {
+            let _ = writeln!(
+                h,
+                "<figure><img alt=\"{0}\" src=\"data:image/png;base64,{1}\"><figcaption>{0}\
+                 </figcaption></figure>",
+                escape(&r.caption),
+                base64(&r.png)
+            );
+        }
+        h.push_str("</div></section>\n");
+    }
+    if !plots.is_empty() {
+        h.push_str("<section><h2>Per frame</h2><div class=\"grid\">\n");
+        for p in plots {
+            let _ = writeln!(h, "<figure>{}</figure>", p.svg);
+        }
+        h.push_str("</div></section>\n");
+    }
+    h.push_str("<section><h2>Files</h2><ul>\n");
+    for f in &summary.files {
+        let _ = writeln!(
+            h,
+            "<li><a href=\"{0}\">{0}</a> — {1:.2} MB</li>",
+            escape(&f.file),
+            f.bytes as f64 / 1e6
+        );
+    }
+    for f in [
+        "sequence.pc2",
+        "mesh.obj",
+        "blendshapes.csv",
+        "metrics.json",
+        "landmarks.json",
+    ] {
+        if capture.dir.join(f).is_file() {
+            let _ = writeln!(h, "<li><a href=\"{f}\">{f}</a></li>");
+        }
+    }
+    h.push_str("</ul></section>\n</body></html>\n");
+    h
+}
+
+/// The summary table: what a user checks first.
+fn summary_rows(m: &Value, e: &ExportSummary) -> Vec<(String, String)> {
+    let s = &m["summary"];
+    let q = &s["quality"];
+    let num = |v: &Value, digits: usize| {
+        v.as_f64()
+            .map_or_else(|| "—".to_string(), |x| format!("{x:.digits$}"))
+    };
+    let mut rows = vec![
+        (
+            "frames (meshed / without a face)".into(),
+            format!(
+                "{} ({} / {})",
+                s["frames"],
+                s["solved"].as_u64().unwrap_or(0) + s["carried"].as_u64().unwrap_or(0),
+                s["no_face"]
+            ),
+        ),
+        (
+            "speed".into(),
+            format!(
+                "{} fps, CPU use {} cores, peak memory {} MiB",
+                num(&s["fps"], 1),
+                num(&s["cpu_use"], 2),
+                num(&s["peak_rss_mib"], 0)
+            ),
+        ),
+        (
+            "camera".into(),
+            format!(
+                "{}×{}, fx {} px",
+                m["intrinsics"]["width"],
+                m["intrinsics"]["height"],
+                num(&m["intrinsics"]["fx"], 1)
+            ),
+        ),
+        (
+            "landmark image jitter, fused / tracked".into(),
+            format!(
+                "{} / {} px ({}× steadier)",
+                num(&q["image_jitter_px"]["fused"], 3),
+                num(&q["image_jitter_px"]["raw"], 3),
+                num(&q["image_jitter_reduction"], 2)
+            ),
+        ),
+        (
+            "vertex jitter, fused / raw (head motion removed)".into(),
+            format!(
+                "{} / {} mm",
+                num(&q["vertex_jitter_mm"]["fused"], 3),
+                num(&q["vertex_jitter_mm"]["raw"], 3)
+            ),
+        ),
+        (
+            "reprojection of the fused landmarks".into(),
+            format!("{} px", num(&q["reprojection_px"]["fused"], 2)),
+        ),
+        (
+            "mean curvature improvement, roughness raw → fused".into(),
+            format!(
+                "{}, {} → {}",
+                num(&s["mean_curvature_improvement"], 2),
+                num(&s["mean_roughness_raw"], 4),
+                num(&s["mean_roughness"], 4)
+            ),
+        ),
+    ];
+    if let Some(rms) = e.glb_rms_error_m {
+        rows.push((
+            "sequence.glb".into(),
+            format!(
+                "{} morph targets ({} ARKit), {:.3} mm RMS from the point cache",
+                e.named_targets + e.residual_targets,
+                e.named_targets,
+                rms * 1e3
+            ),
+        ));
+    }
+    if let Some(c) = e.texture_coverage {
+        rows.push((
+            "texture".into(),
+            format!(
+                "{} frames, {:.0} % of the face seen",
+                e.texture_frames,
+                c * 100.0
+            ),
+        ));
+    }
+    rows
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// Standard base64 with padding.
+fn base64(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+        for i in 0..4 {
+            if i <= chunk.len() {
+                out.push(ALPHABET[(n >> (18 - 6 * i)) as usize & 63] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+const STYLE: &str = "body{font:15px/1.45 system-ui,sans-serif;margin:2em auto;max-width:1100px;\
+padding:0 1em;color:#222}h1{font-size:1.5em;margin-bottom:.2em}.sub{color:#666;margin-top:0}\
+table{border-collapse:collapse}th,td{padding:.25em .8em;border-bottom:1px solid #ddd;\
+text-align:left;vertical-align:top}th{font-weight:500;color:#444}\
+.grid{display:flex;flex-wrap:wrap;gap:1em}figure{margin:0}figure img{max-width:340px;\
+border:1px solid #ccc}figure svg{max-width:520px;height:auto}figcaption{color:#666;\
+font-size:.9em}#visage-viewer{max-width:720px}";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_matches_the_standard_vectors() {
+        for (input, expected) in [
+            ("", ""),
+            ("f", "Zg=="),
+            ("fo", "Zm8="),
+            ("foo", "Zm9v"),
+            ("foob", "Zm9vYg=="),
+            ("fooba", "Zm9vYmE="),
+            ("foobar", "Zm9vYmFy"),
+        ] {
+            assert_eq!(base64(input.as_bytes()), expected);
+        }
+    }
+}
