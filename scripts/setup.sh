@@ -1,23 +1,25 @@
 #!/usr/bin/env bash
 # Sets up visage on a fresh Debian machine and runs the main job on a sample.
 #
-#   scripts/setup.sh          install system packages, build (release), fetch the pinned
-#                             MediaPipe models (npm, and the iris network from PyPI), run the
-#                             sample job into out/sample/
-#   scripts/setup.sh --ci     packages and models only (what the test suite needs)
+#   scripts/setup.sh          install system packages, build the report's 3-D viewer (npm) and
+#                             visage (release), fetch the pinned MediaPipe models (npm, and the
+#                             iris network from PyPI), run the sample job into out/sample/
+#   scripts/setup.sh --ci     packages, viewer and models only (what the test suite needs)
 #
-# Needs: a Rust toolchain (cargo), Node.js/npm (for `npm pack`), Python 3 with pip (for
-# `pip download` of the mediapipe wheel), apt-get as root (or the packages below already
-# installed).
+# Needs: a Rust toolchain (cargo), Node.js/npm (for `npm pack` and the viewer's pinned
+# packages), Python 3 with pip (for `pip download` of the mediapipe wheel), apt-get as root (or
+# the packages below already installed).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 mode=full
 [ "${1:-}" = "--ci" ] && mode=ci
 
-# System packages: FFmpeg's command-line tools decode video (crates/video).
+# System packages: FFmpeg's command-line tools decode video and encode the preview
+# (crates/video); Chromium runs the report's browser test (web/viewer/test).
 need=()
 command -v ffmpeg >/dev/null 2>&1 || need+=(ffmpeg)
+[ -x /usr/bin/chromium ] || need+=(chromium)
 command -v npm >/dev/null 2>&1 || need+=(npm)
 python3 -m pip --version >/dev/null 2>&1 || need+=(python3-pip)
 if [ ${#need[@]} -gt 0 ]; then
@@ -30,6 +32,11 @@ if [ ${#need[@]} -gt 0 ]; then
     exit 1
   fi
 fi
+
+# The report's 3-D viewer: three.js and the viewer bundled into one script
+# (web/viewer/dist/viewer.js), which the build embeds in visage; the glTF validator and the
+# browser test's driver come with it (versions pinned in web/viewer/package-lock.json).
+web/viewer/build.sh >/dev/null
 
 target_dir="${CARGO_TARGET_DIR:-target}"
 if [ "$mode" = ci ]; then
@@ -55,10 +62,10 @@ if [ ! -f "$video" ]; then
 fi
 out=out/sample
 rm -rf "$out" && mkdir -p "$out"
-"$bin" run "$video" --out "$out" --save-raw
-# `visage run` writes the intrinsics it used (here the default 60° field of view) to camera.json.
-for frame in 000000 000060 000120 000180; do
-  "$bin" render "$out/meshes/$frame.ply" --intrinsics "$out/camera.json" --out "$out/preview_$frame.png"
-  "$bin" render "$out/raw/$frame.ply" --intrinsics "$out/camera.json" --out "$out/preview_${frame}_raw.png"
-done
-echo "setup: sample written to $out/ (meshes/*.ply, blendshapes.csv, identity.obj, metrics.json, landmarks.json, previews preview_*.png)"
+# Every output: the point cache with its OBJ, the animated glb with its texture, the plots, the
+# offline report and the preview video.
+"$bin" run "$video" --out "$out" --report --glb --preview
+# A textured turntable of one frame, rendered by visage's rasteriser from the point cache.
+"$bin" render "$out/sequence.pc2" --frame 60 --intrinsics "$out/camera.json" \
+  --texture "$out/texture.png" --views turntable:8 --out "$out/turntable.png"
+echo "setup: sample written to $out/ (report.html, sequence.glb, preview.mp4, sequence.pc2 + mesh.obj, blendshapes.csv, metrics.json; turntable_*.png)"

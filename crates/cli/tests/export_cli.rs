@@ -3,28 +3,14 @@
 //! the Khronos validator, `visage export` remakes them from the folder, and a folder that is
 //! not a run's is a clear error.
 
+mod common;
+
+use common::{run_ok, s, visage};
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 use serde_json::Value;
-
-fn visage(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_visage"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn run_ok(args: &[&str]) -> String {
-    let o = visage(args);
-    let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(o.status.success(), "{args:?}: {err}");
-    err
-}
 
 /// A 30-frame run with PLYs and the exports (but the preview), into `out`.
 fn run_with_exports(out: &Path) {

@@ -8,6 +8,7 @@ mod common;
 use common::{run_ok, s, visage};
 
 use std::path::{Path, PathBuf};
+use std::process::Command;
 
 use serde_json::Value;
 
@@ -399,4 +400,68 @@ fn the_model_mesh_and_the_model_depth_run() {
         assert_eq!(mesh.uvs.len(), mesh.vertices.len(), "{name}: UVs");
         assert!(mesh.uvs.iter().flatten().all(|c| (0.0..=1.0).contains(c)));
     }
+}
+
+/// Ctrl-C (SIGINT) stops the run after the current frame: what was done is written and
+/// consistent — metrics.json says "interrupted", the point cache has one sample per listed
+/// frame, landmarks.json is valid JSON, no temporary file is left — and the exit code is 130.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn ctrl_c_stops_after_a_frame_and_keeps_the_work() {
+    let (models, clip) = inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let child = Command::new(env!("CARGO_BIN_EXE_visage"))
+        .args([
+            "run",
+            s(&clip),
+            "--out",
+            s(&out),
+            "--ply",
+            "--models",
+            s(&models),
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while !out.join("meshes/000003.ply").exists() {
+        assert!(
+            started.elapsed().as_secs() < 120,
+            "no mesh after two minutes"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted after"), "{err}");
+    let m = json(&out.join("metrics.json"));
+    assert_eq!(m["status"], "interrupted");
+    let frames = m["frames"].as_array().unwrap().len();
+    assert!((4..216).contains(&frames), "{frames} frames");
+    let cache = visage_mesh::io::read_pc2(&out.join("sequence.pc2")).unwrap();
+    assert_eq!(cache.samples(), frames);
+    assert_eq!(
+        json(&out.join("landmarks.json"))["frames"]
+            .as_array()
+            .unwrap()
+            .len(),
+        frames
+    );
+    assert!(out.join("camera.json").is_file());
+    let leftovers: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().extension().is_some_and(|x| x == "tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
 }

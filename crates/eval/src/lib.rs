@@ -47,7 +47,6 @@ pub use report::{csv, sweep_table, table, write_results, write_sweep};
 pub use simulated_tracker::{
     simulate_tracking, TrackedSequence, TrackerNoise, BENCHMARK_LATENCY_FRAMES,
 };
-pub use visage_plot::{heatmap_svg, line_chart_svg, xy_chart_svg, Series, XySeries};
 pub use synthesis::{
     synthesize, SynthesisConfig, SyntheticFrame, SyntheticSequence, EXPRESSION_ACTIVITY,
     PIVOT_DEPTH_M,
@@ -62,3 +61,4 @@ pub use video_report::{
     evaluate_clip, stability_chart_svg, stability_table, ClipReport, ClipTracks, Comparison,
     MethodFigures, PipelineOutput, RegionFigures,
 };
+pub use visage_plot::{heatmap_svg, line_chart_svg, xy_chart_svg, Series, XySeries};

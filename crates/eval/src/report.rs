@@ -4,8 +4,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::benchmark::{BenchmarkResults, SweepPoint};
-use visage_plot::{heatmap_svg, line_chart_svg, Series};
 use crate::EvalError;
+use visage_plot::{heatmap_svg, line_chart_svg, Series};
 
 /// Table order of the methods (then any others, by name).
 const ORDER: [&str; 5] = ["raw", "per_frame_biharmonic", "taubin", "streaming", "clip"];

@@ -58,6 +58,9 @@ pub enum Error {
     /// A mesh file could not be written.
     #[error("cannot write {}", path.display())]
     WriteMesh { path: PathBuf, source: MeshIoError },
+    /// The run was asked to stop (Ctrl-C, SIGTERM); the frames before it are complete.
+    #[error("interrupted")]
+    Interrupted,
     /// A stage thread panicked (a bug).
     #[error("internal error: the {0} stage panicked")]
     Panic(&'static str),

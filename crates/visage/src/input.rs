@@ -3,6 +3,7 @@
 //! keep.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use visage_video::{focal_length_35mm, is_image_path, read_image, Frame, FrameSource};
@@ -21,6 +22,8 @@ pub struct Input {
     kept: usize,
     /// Which kept frames to copy, and where to.
     copies: Option<(FrameFilter, KeptFrames)>,
+    /// Set from outside (Ctrl-C): the input ends before its next frame.
+    stop: Option<Arc<AtomicBool>>,
 }
 
 /// Chooses the frames [`Input::keep_copies`] copies.
@@ -78,6 +81,7 @@ impl Input {
             max_frames: None,
             kept: 0,
             copies: None,
+            stop: None,
         })
     }
 
@@ -120,6 +124,13 @@ impl Input {
         into: KeptFrames,
     ) -> Input {
         self.copies = Some((Box::new(select), into));
+        self
+    }
+
+    /// Ends the input before its next frame once `stop` is set, so that a run stops cleanly:
+    /// the frames already read go through every stage and are written.
+    pub fn stop_on(mut self, stop: Arc<AtomicBool>) -> Input {
+        self.stop = Some(stop);
         self
     }
 
@@ -167,7 +178,9 @@ impl Input {
     pub(crate) fn next_decoded(&mut self) -> Option<Result<Decoded, Error>> {
         let mut decode_ms = 0.0;
         loop {
-            if self.max_frames.is_some_and(|m| self.kept >= m) {
+            if self.max_frames.is_some_and(|m| self.kept >= m)
+                || self.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst))
+            {
                 return None;
             }
             let t = std::time::Instant::now();

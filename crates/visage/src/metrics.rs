@@ -359,6 +359,8 @@ pub enum RunStatus {
     Complete,
     /// Stopped by an error (`Report::error`); the frames before it are listed.
     Failed,
+    /// Stopped on request (Ctrl-C, SIGTERM) after a frame; the frames before it are listed.
+    Interrupted,
 }
 
 /// Everything `metrics.json` holds. `P` is the run's parameters.

@@ -125,10 +125,10 @@ impl RunOutcome {
     /// The `metrics.json` record of the run of `input`.
     pub fn report(&self, input: &str) -> Report<&Parameters> {
         Report {
-            status: if self.error.is_some() {
-                RunStatus::Failed
-            } else {
-                RunStatus::Complete
+            status: match &self.error {
+                None => RunStatus::Complete,
+                Some(Error::Interrupted) => RunStatus::Interrupted,
+                Some(_) => RunStatus::Failed,
             },
             error: self.error.as_ref().map(|e| error_chain(e)),
             input: input.to_owned(),

@@ -18,7 +18,11 @@ use visage::{
     Reconstructor, TemporalMode, DEFAULT_SUBDIVISION,
 };
 
+use std::sync::atomic::Ordering;
+
 use crate::commands::export::{exports_into, print_summary, ExportArgs};
+use crate::exit::Failure;
+use crate::interrupt;
 use crate::progress::progress_bar;
 
 /// Mesh design.
@@ -297,11 +301,17 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     // The camera the meshes are in: `visage render MESH --intrinsics OUT/camera.json`.
     out.write_camera(reconstructor.intrinsics())?;
     let bar = p.progress(&input);
+    // Ctrl-C ends the input: the frames read so far go through and are written.
+    let stop = interrupt::install();
+    let input = input.stop_on(stop.clone());
     let mut sink = Terminal {
         sink: out,
         bar: &bar,
     };
     let mut outcome = reconstructor.run(input, &mut sink);
+    if stop.load(Ordering::SeqCst) && outcome.error.is_none() {
+        outcome.error = Some(visage::Error::Interrupted);
+    }
     bar.finish_and_clear();
     let mut out = sink.sink;
     if let (Err(e), None) = (out.finish(), &outcome.error) {
@@ -311,6 +321,19 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         out.write_identity(identity)?;
     }
     out.write_metrics(&outcome.report(&p.input.display().to_string()))?;
+    if let Some(visage::Error::Interrupted) = outcome.error {
+        return Err(Failure {
+            code: interrupt::INTERRUPTED,
+            error: anyhow::anyhow!(
+                "interrupted after {} frames: their meshes, landmarks.json and metrics.json \
+                 (status \"interrupted\") are in {}; `visage export {}` makes the other files",
+                outcome.frames.len(),
+                args.out.display(),
+                args.out.display()
+            ),
+        }
+        .into());
+    }
     if let Some(e) = outcome.error {
         return Err(anyhow::Error::new(e).context(format!(
             "stopped after {} frames (meshes so far and metrics.json are in {})",

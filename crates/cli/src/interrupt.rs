@@ -1,0 +1,26 @@
+//! Ctrl-C and SIGTERM: the first asks a long command to stop after the current frame (it then
+//! writes what it has and exits 130); a second one stops at once, leaving a clean terminal line.
+
+use std::io::Write;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+/// Exit code of a run stopped by Ctrl-C or SIGTERM (128 + SIGINT, as shells report it).
+pub const INTERRUPTED: u8 = 130;
+
+/// Installs the handler; the flag turns true on the first signal.
+pub fn install() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let seen = flag.clone();
+    let installed = ctrlc::set_handler(move || {
+        if seen.swap(true, Ordering::SeqCst) {
+            // The second signal: clear the progress bar's line and go.
+            let _ = write!(std::io::stderr(), "\r\x1b[2K");
+            std::process::exit(i32::from(INTERRUPTED));
+        }
+    });
+    if let Err(e) = installed {
+        eprintln!("warning: Ctrl-C will stop at once, without writing metrics.json: {e}");
+    }
+    flag
+}
