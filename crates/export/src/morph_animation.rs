@@ -378,6 +378,80 @@ fn quaternion(r: &[[f64; 3]; 3]) -> [f32; 4] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::capture::CaptureFrame;
+    use visage_camera::Intrinsics;
+    use visage_mesh::TriMesh;
+
+    /// A moving, turning surface that deforms along two shapes: the encoding needs two
+    /// residual targets, plays every frame back exactly, and keeps its weights in [0, 1].
+    #[test]
+    fn a_two_shape_deformation_under_head_motion_plays_back() {
+        let n = 12;
+        let rest: Vec<[f64; 3]> = (0..n)
+            .map(|i| {
+                [
+                    0.01 * i as f64,
+                    0.02 * (i % 3) as f64,
+                    0.005 * (i % 4) as f64,
+                ]
+            })
+            .collect();
+        let shape = |j: usize| -> Vec<[f64; 3]> {
+            (0..n)
+                .map(|i| [0.0, 0.002 * ((i + j) % 5) as f64, 0.001 * (j as f64 + 1.0)])
+                .collect()
+        };
+        let (a, b) = (shape(0), shape(2));
+        let mut frames = Vec::new();
+        let mut surfaces = Vec::new();
+        for k in 0..20 {
+            let t = k as f64 / 30.0;
+            let angle = 0.3 * (3.0 * t).sin();
+            let (c, s) = (angle.cos(), angle.sin());
+            let pose = RigidTransform {
+                rotation: [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]],
+                translation: [0.01 * k as f64, 0.0, 0.5],
+            };
+            let (wa, wb) = ((5.0 * t).sin(), (7.0 * t).cos());
+            for i in 0..n {
+                let head = std::array::from_fn(|m| rest[i][m] + wa * a[i][m] + wb * b[i][m]);
+                surfaces.extend(pose.apply(head).map(|x| x as f32));
+            }
+            frames.push(CaptureFrame {
+                index: k,
+                time_s: t,
+                meshed: true,
+                pose: Some(pose),
+            });
+        }
+        let capture = Capture {
+            dir: "synthetic".into(),
+            intrinsics: Intrinsics {
+                width: 64,
+                height: 64,
+                fx: 50.0,
+                fy: 50.0,
+                cx: 31.5,
+                cy: 31.5,
+            },
+            input: "synthetic".into(),
+            mesh: TriMesh::new(rest.clone(), vec![[0, 1, 2]]),
+            frames,
+            surfaces,
+            blendshapes: None,
+            metrics: serde_json::Value::Null,
+        };
+        let animation = MorphAnimation::encode(&capture, |_| None).unwrap();
+        assert_eq!(animation.targets.len(), 2, "{:?}", animation.names);
+        assert!(animation.max_error_m < 1e-6, "{}", animation.max_error_m);
+        assert!(animation
+            .weights
+            .iter()
+            .flatten()
+            .all(|w| (0.0..=1.0).contains(w)));
+        assert_eq!(animation.times.len(), 20);
+        assert!((animation.times[19] - 19.0 / 30.0).abs() < 1e-6);
+    }
 
     #[test]
     fn quaternions_rotate_like_their_matrices() {

@@ -52,18 +52,10 @@ pub fn report_html(
         s["frames"],
         escape(m["status"].as_str().unwrap_or("?")),
     );
-    h.push_str("<section><h2>Summary</h2><table>\n");
-    for (label, value) in summary_rows(m, summary) {
-        let _ = writeln!(
-            h,
-            "<tr><th>{}</th><td>{}</td></tr>",
-            escape(&label),
-            escape(&value)
-        );
-    }
-    h.push_str("</table></section>\n");
+    // The viewer and the summary side by side on a wide screen: what a first look needs.
+    h.push_str("<div class=\"top\">\n");
     match viewer {
-        Some((js, glb)) => {
+        Some((_, glb)) => {
             let _ = writeln!(
                 h,
                 "<section><h2>Animation</h2><p class=\"sub\">sequence.glb: the fused surface \
@@ -73,15 +65,22 @@ pub fn report_html(
                  </section>",
                 base64(glb)
             );
-            // The bundle is inlined as a classic script; it must not close the tag early.
-            let js = js.replace("</script", "<\\/script");
-            let _ = writeln!(h, "<script>{js}</script>");
         }
         None => h.push_str(
             "<section><h2>Animation</h2><p>This visage was built without the 3-D viewer \
              (web/viewer/build.sh before building visage adds it).</p></section>\n",
         ),
     }
+    h.push_str("<section><h2>Summary</h2><table>\n");
+    for (label, value) in summary_rows(m, summary) {
+        let _ = writeln!(
+            h,
+            "<tr><th>{}</th><td>{}</td></tr>",
+            escape(&label),
+            escape(&value)
+        );
+    }
+    h.push_str("</table></section></div>\n");
     if !renders.is_empty() {
         h.push_str("<section><h2>Frames</h2><div class=\"grid\">\n");
         for r in renders {
@@ -122,7 +121,16 @@ pub fn report_html(
             let _ = writeln!(h, "<li><a href=\"{f}\">{f}</a></li>");
         }
     }
-    h.push_str("</ul></section>\n</body></html>\n");
+    h.push_str("</ul></section>\n");
+    if let Some((js, _)) = viewer {
+        // The bundle is inlined as a classic script; it must not close the tag early.
+        let _ = writeln!(
+            h,
+            "<script>{}</script>",
+            js.replace("</script", "<\\/script")
+        );
+    }
+    h.push_str("</body></html>\n");
     h
 }
 
@@ -246,13 +254,14 @@ fn base64(bytes: &[u8]) -> String {
     out
 }
 
-const STYLE: &str = "body{font:15px/1.45 system-ui,sans-serif;margin:2em auto;max-width:1100px;\
-padding:0 1em;color:#222}h1{font-size:1.5em;margin-bottom:.2em}.sub{color:#666;margin-top:0}\
+const STYLE: &str = "body{font:15px/1.45 system-ui,sans-serif;margin:2em auto;max-width:1200px;\
+padding:0 1em;color:#222}.top{display:flex;flex-wrap:wrap;gap:2em;align-items:flex-start}\
+.top>section{flex:1 1 480px;min-width:0}h1{font-size:1.5em;margin-bottom:.2em}.sub{color:#666;margin-top:0}\
 table{border-collapse:collapse}th,td{padding:.25em .8em;border-bottom:1px solid #ddd;\
 text-align:left;vertical-align:top}th{font-weight:500;color:#444}\
 .grid{display:flex;flex-wrap:wrap;gap:1em}figure{margin:0}figure img{max-width:340px;\
 border:1px solid #ccc}figure svg{max-width:520px;height:auto}figcaption{color:#666;\
-font-size:.9em}#visage-viewer{max-width:720px}";
+font-size:.9em}#visage-viewer{max-width:640px}";
 
 #[cfg(test)]
 mod tests {

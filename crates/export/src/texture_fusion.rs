@@ -273,3 +273,58 @@ fn mean_colour(colour: &[Option<[f64; 3]>]) -> [f64; 3] {
         acc.map(|a| a / n)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 0.2 m square at 1 m facing the camera, UVs over its area, seen in an image whose left
+    /// half is red and right half blue: the texture's left half comes out red, its right blue,
+    /// and the unseen margin takes the neighbours' colours.
+    #[test]
+    fn a_square_takes_the_colours_it_is_seen_with() {
+        let k = Intrinsics {
+            width: 64,
+            height: 64,
+            fx: 100.0,
+            fy: 100.0,
+            cx: 31.5,
+            cy: 31.5,
+        };
+        let mut mesh = TriMesh::new(
+            vec![
+                [-0.1, -0.1, 1.0],
+                [0.1, -0.1, 1.0],
+                [0.1, 0.1, 1.0],
+                [-0.1, 0.1, 1.0],
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+        );
+        // v up: the square's top edge (y = −0.1, up in the image) at v = 1.
+        mesh.uvs = vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+        let image = RgbImage::from_fn(64, 64, |x, _| {
+            if x < 32 {
+                image::Rgb([255, 0, 0])
+            } else {
+                image::Rgb([0, 0, 255])
+            }
+        });
+        let view = TextureView {
+            vertices: mesh.vertices.clone(),
+            image: &image,
+        };
+        let t = fuse_texture(&mesh, &k, &[view], 32).unwrap();
+        assert_eq!(t.frames_used, 1);
+        assert!(t.coverage > 0.95, "coverage {}", t.coverage);
+        assert_eq!(t.image.get_pixel(4, 16).0, [255, 0, 0]);
+        assert_eq!(t.image.get_pixel(27, 16).0, [0, 0, 255]);
+        // A view that sees nothing leaves a plain texture, and no frame counted.
+        let behind: Vec<[f64; 3]> = mesh.vertices.iter().map(|p| [p[0], p[1], -1.0]).collect();
+        let none = TextureView {
+            vertices: behind,
+            image: &image,
+        };
+        let t = fuse_texture(&mesh, &k, &[none], 16).unwrap();
+        assert_eq!((t.frames_used, t.coverage), (0, 0.0));
+    }
+}

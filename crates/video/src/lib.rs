@@ -12,6 +12,9 @@
 //!
 //! A truncated or corrupt video yields every decodable frame, then one
 //! [`VideoError::Broken`] naming the frame index where decoding stopped.
+//!
+//! The other way, [`VideoWriter`] encodes RGB frames to H.264 through `ffmpeg` (the preview
+//! video), under a temporary name until it is finished.
 
 mod encoder;
 mod error;

@@ -33,8 +33,8 @@
 //! ```
 //! [`Reconstructor::process`] is causal and single-threaded; [`Reconstructor::run`] runs a
 //! whole input with decoding, tracking and fusion on their own threads, in streaming or clip
-//! mode ([`TemporalMode`]), into a [`FrameSink`] such as [`OutputDir`] (PLY meshes,
-//! `landmarks.json`, `metrics.json`). `examples/reconstruct.rs` writes a PLY per frame.
+//! mode ([`TemporalMode`]), into a [`FrameSink`] such as [`OutputDir`] (the point cache
+//! `sequence.pc2` with `mesh.obj`, PLY meshes on request, `landmarks.json`, `metrics.json`). `examples/reconstruct.rs` writes a PLY per frame.
 //!
 //! # Conventions
 //! - Camera coordinates: x right, y down, z forward, metres; pixel `(i, j)`'s centre at

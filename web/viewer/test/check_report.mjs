@@ -1,4 +1,4 @@
-// Usage: node test/check_report.mjs REPORT.html SCREENSHOT.png
+// Usage: node test/check_report.mjs REPORT.html SCREENSHOT.png [viewport]
 // Opens the report in headless Chromium (software WebGL), waits for the viewer,
 // checks that it draws something and that the animation changes the picture.
 // Prints one JSON line; exit 0 only when every check passes.
@@ -31,9 +31,11 @@ export const CHROMIUM_ARGS = [
   '--disable-sync',
 ];
 
-const [reportPath, screenshotPath] = process.argv.slice(2);
+const [reportPath, screenshotPath, screenshotMode] = process.argv.slice(2);
+// 'viewport': only the first screenful (for the README); default: the whole page.
+const fullPage = screenshotMode !== 'viewport';
 if (!reportPath || !screenshotPath) {
-  console.error('usage: node test/check_report.mjs REPORT.html SCREENSHOT.png');
+  console.error('usage: node test/check_report.mjs REPORT.html SCREENSHOT.png [viewport]');
   process.exit(2);
 }
 
@@ -51,7 +53,7 @@ const browser = await chromium.launch({
   timeout: 60_000,
 });
 try {
-  const page = await browser.newPage({ viewport: { width: 800, height: 760 }, deviceScaleFactor: 1 });
+  const page = await browser.newPage({ viewport: { width: 1280, height: 800 }, deviceScaleFactor: 1 });
   page.on('console', (msg) => {
     if (msg.type() === 'error') consoleErrors.push(msg.text());
   });
@@ -134,7 +136,7 @@ try {
 try {
   // Also on failure: the picture shows the viewer's red error message.
   const [page] = browser.contexts().flatMap((c) => c.pages());
-  if (page) await page.screenshot({ path: screenshotPath, fullPage: true });
+  if (page) await page.screenshot({ path: screenshotPath, fullPage });
   else problems.push('no page to screenshot');
 } catch (err) {
   problems.push(`screenshot failed: ${err && err.message ? err.message.split('\n')[0] : err}`);
