@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The project's test command: formatting, lints, import circles, the whole test suite (unit,
 # integration and doc tests) and the docs.
-# Tests that need ../shared (data, reference outputs), the model files or FFmpeg are listed as
-# *ignored* when those are absent (run scripts/setup.sh first); with CI=true they run and fail.
+# Tests that need ../shared (data, reference outputs), the model files, FFmpeg or the web tools
+# (web/viewer built, Chromium) are listed as *ignored* when those are absent (run
+# scripts/setup.sh first); with CI=true they run and fail.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # What is present, so that the tests' build scripts re-run when it changes (crates/testdata).
@@ -10,6 +11,8 @@ models="${VISAGE_MODELS:-models}"
 VISAGE_TEST_DATA="shared=$([ -d ../shared/data ] && echo 1 || echo 0)"
 VISAGE_TEST_DATA+=" models=$(ls "$models" 2>/dev/null | tr '\n' ,)"
 VISAGE_TEST_DATA+=" ffmpeg=$(command -v ffmpeg >/dev/null && echo 1 || echo 0)"
+VISAGE_TEST_DATA+=" chromium=$([ -x /usr/bin/chromium ] && echo 1 || echo 0)"
+VISAGE_TEST_DATA+=" validator=$([ -d web/viewer/node_modules/gltf-validator ] && echo 1 || echo 0)"
 export VISAGE_TEST_DATA
 cargo fmt --all --check
 cargo clippy -q --workspace --all-targets -- -D warnings
