@@ -88,9 +88,5 @@ fn crop_png(frame: &Frame, width: u32, height: u32) -> Result<Vec<u8>, ExportErr
         let c = frame.color[((y + y0) * width + x + x0) as usize];
         image::Rgb([0, 1, 2].map(|i| visage_mesh::color::linear_to_srgb_u8(c[i])))
     });
-    let mut png = Vec::new();
-    image::DynamicImage::ImageRgb8(image)
-        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-        .map_err(|e| ExportError::Internal(format!("a report render: {e}")))?;
-    Ok(png)
+    crate::png_bytes(&image)
 }

@@ -36,13 +36,13 @@ pub use preview::{write_preview, PreviewSummary};
 pub use report::{report_html, Render, VIEWER_JS};
 pub use texture_fusion::{fuse_texture, FusedTexture, TextureView};
 
-/// The texture's side in texels: the power of two nearest twice the face's size in the video
-/// (texels as fine as the video's pixels on the face, whose UV layout fills about half the
-/// texture's width), within these bounds.
+/// The texture's side in texels: the smallest power of two that gives the face as many texels
+/// as it has pixels in the video (the face's size in pixels over the share of the texture its
+/// UV layout spans), within these bounds. Finer would only interpolate the video.
 pub const TEXTURE_SIZE_RANGE: (usize, usize) = (256, 2048);
 /// Frames the texture is fused from, at most: evenly spaced over the meshed frames of the first
 /// [`TEXTURE_SECONDS`] (the input is decoded again only that far).
-pub const TEXTURE_FRAMES: usize = 12;
+pub const TEXTURE_FRAMES: usize = 8;
 /// Seconds of the input the texture is fused from.
 pub const TEXTURE_SECONDS: f64 = 2.0;
 
@@ -142,80 +142,38 @@ pub fn export(
     } else {
         None
     };
-    let mut glb = None;
-    if glb_wanted {
-        let t = Instant::now();
-        let animation = MorphAnimation::encode(&capture, |base| {
-            let deltas = arkit_targets::arkit_targets(&capture, base)?;
-            let curves = capture.blendshapes.as_ref()?;
-            let order: Vec<Option<usize>> = visage::ARKIT_BLENDSHAPES
-                .iter()
-                .map(|a| curves.names.iter().position(|n| n == a))
-                .collect();
-            Some(NamedTargets {
-                names: visage::ARKIT_BLENDSHAPES
-                    .iter()
-                    .map(|s| s.to_string())
-                    .collect(),
-                deltas,
-                weights: curves
-                    .weights
-                    .iter()
-                    .map(|w| {
-                        order
-                            .iter()
-                            .map(|i| w.as_ref().zip(*i).map_or(0.0, |(w, i)| w[i]))
-                            .collect()
-                    })
-                    .collect(),
-            })
-        })?;
-        let extras = serde_json::json!({
-            "input": capture.input,
-            "start_s": animation.start_s,
-            "rms_error_m": animation.rms_error_m,
-            "max_error_m": animation.max_error_m,
-        });
-        let bytes = write_glb(
-            &animation,
-            &capture.mesh.triangles,
-            &capture.mesh.uvs,
-            &capture.intrinsics,
-            texture_png.as_deref(),
-            extras,
-        )?;
-        write_file(&dir.join("sequence.glb"), &bytes)?;
-        glb = Some(bytes);
-        summary.named_targets = animation.named_targets;
-        summary.named_explained = animation.named_explained;
-        summary.residual_targets = animation.targets.len() - animation.named_targets;
-        summary.glb_rms_error_m = Some(animation.rms_error_m);
-        summary.glb_max_error_m = Some(animation.max_error_m);
-        summary.files.push(file_entry(dir, "sequence.glb", t));
-    }
-    let mut plots = Vec::new();
-    if options.plots || options.report {
-        let t = Instant::now();
-        let landmarks_path = dir.join("landmarks.json");
-        let landmarks = landmarks_path
-            .is_file()
-            .then(|| capture::read_json(&landmarks_path))
-            .transpose()?;
-        plots = run_plots(&capture, landmarks.as_ref());
-        let plot_dir = dir.join("plots");
-        std::fs::create_dir_all(&plot_dir).map_err(|source| ExportError::Write {
-            path: plot_dir.clone(),
-            source,
-        })?;
-        for p in &plots {
-            write_file(&plot_dir.join(p.file), p.svg.as_bytes())?;
+    // The glb and the plots are independent: each on a core.
+    let (glb, plots) = rayon::join(
+        || {
+            glb_wanted
+                .then(|| make_glb(&capture, dir, texture_png.as_deref()))
+                .transpose()
+        },
+        || {
+            (options.plots || options.report)
+                .then(|| make_plots(&capture, dir))
+                .transpose()
+        },
+    );
+    let glb = match glb? {
+        Some((bytes, animation, file)) => {
+            summary.named_targets = animation.named_targets;
+            summary.named_explained = animation.named_explained;
+            summary.residual_targets = animation.targets.len() - animation.named_targets;
+            summary.glb_rms_error_m = Some(animation.rms_error_m);
+            summary.glb_max_error_m = Some(animation.max_error_m);
+            summary.files.push(file);
+            Some(bytes)
         }
-        summary.files.push(ExportedFile {
-            file: "plots/".into(),
-            bytes: plots.iter().map(|p| p.svg.len() as u64).sum(),
-            ms: t.elapsed().as_secs_f64() * 1e3,
-        });
-    }
+        None => None,
+    };
+    let plots = match plots? {
+        Some((plots, file)) => {
+            summary.files.push(file);
+            plots
+        }
+        None => Vec::new(),
+    };
     if options.report {
         let t = Instant::now();
         let renders = frame_renders::frame_renders(&capture, texture_image.as_ref())?;
@@ -234,6 +192,81 @@ pub fn export(
         serde_json::to_string_pretty(&summary).map_err(|e| ExportError::Internal(e.to_string()))?;
     write_file(&dir.join("export.json"), text.as_bytes())?;
     Ok(summary)
+}
+
+/// The animation encoded and written to `sequence.glb`: its bytes, the encoding and the file.
+fn make_glb(
+    capture: &Capture,
+    dir: &Path,
+    texture_png: Option<&[u8]>,
+) -> Result<(Vec<u8>, MorphAnimation, ExportedFile), ExportError> {
+    let t = Instant::now();
+    let animation = MorphAnimation::encode(capture, |base| {
+        let deltas = arkit_targets::arkit_targets(capture, base)?;
+        let curves = capture.blendshapes.as_ref()?;
+        let order: Vec<Option<usize>> = visage::ARKIT_BLENDSHAPES
+            .iter()
+            .map(|a| curves.names.iter().position(|n| n == a))
+            .collect();
+        Some(NamedTargets {
+            names: visage::ARKIT_BLENDSHAPES
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+            deltas,
+            weights: curves
+                .weights
+                .iter()
+                .map(|w| {
+                    order
+                        .iter()
+                        .map(|i| w.as_ref().zip(*i).map_or(0.0, |(w, i)| w[i]))
+                        .collect()
+                })
+                .collect(),
+        })
+    })?;
+    let extras = serde_json::json!({
+        "input": capture.input,
+        "start_s": animation.start_s,
+        "rms_error_m": animation.rms_error_m,
+        "max_error_m": animation.max_error_m,
+    });
+    let bytes = write_glb(
+        &animation,
+        &capture.mesh.triangles,
+        &capture.mesh.uvs,
+        &capture.intrinsics,
+        texture_png,
+        extras,
+    )?;
+    write_file(&dir.join("sequence.glb"), &bytes)?;
+    Ok((bytes, animation, file_entry(dir, "sequence.glb", t)))
+}
+
+/// The per-frame charts, written to `plots/`.
+fn make_plots(capture: &Capture, dir: &Path) -> Result<(Vec<Plot>, ExportedFile), ExportError> {
+    let t = Instant::now();
+    let landmarks_path = dir.join("landmarks.json");
+    let landmarks = landmarks_path
+        .is_file()
+        .then(|| capture::read_json(&landmarks_path))
+        .transpose()?;
+    let plots = run_plots(capture, landmarks.as_ref());
+    let plot_dir = dir.join("plots");
+    std::fs::create_dir_all(&plot_dir).map_err(|source| ExportError::Write {
+        path: plot_dir.clone(),
+        source,
+    })?;
+    for p in &plots {
+        write_file(&plot_dir.join(p.file), p.svg.as_bytes())?;
+    }
+    let file = ExportedFile {
+        file: "plots/".into(),
+        bytes: plots.iter().map(|p| p.svg.len() as u64).sum(),
+        ms: t.elapsed().as_secs_f64() * 1e3,
+    };
+    Ok((plots, file))
 }
 
 /// The texture fused from up to [`TEXTURE_FRAMES`] meshed frames, and its PNG; `None` when the
@@ -303,10 +336,7 @@ fn make_texture(
 
 /// The texture and its PNG.
 fn encode_texture(texture: FusedTexture) -> Result<(FusedTexture, Vec<u8>), ExportError> {
-    let mut png = Vec::new();
-    image::DynamicImage::ImageRgb8(texture.image.clone())
-        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-        .map_err(|e| ExportError::Internal(format!("texture.png: {e}")))?;
+    let png = png_bytes(&texture.image)?;
     Ok((texture, png))
 }
 
@@ -327,9 +357,19 @@ fn texture_size(capture: &Capture, frame: usize) -> usize {
         }
     }
     let face_px = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1.0);
+    let uv = &capture.mesh.uvs;
+    let span = |c: usize| {
+        let (lo, hi) = uv
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), t| {
+                (lo.min(t[c]), hi.max(t[c]))
+            });
+        (hi - lo).clamp(0.05, 1.0)
+    };
     let (min, max) = TEXTURE_SIZE_RANGE;
-    let size = 2f64.powf((2.0 * face_px).log2().round()) as usize;
-    size.clamp(min, max)
+    ((face_px / span(0).max(span(1))).ceil() as usize)
+        .next_power_of_two()
+        .clamp(min, max)
 }
 
 /// The input frames with these indices (increasing), decoded again from `input`.
@@ -359,6 +399,25 @@ fn read_frames(
         });
     }
     Ok(out)
+}
+
+/// An RGB image as PNG, compressed for speed (these are a few hundred kilobytes at most).
+pub(crate) fn png_bytes(image: &image::RgbImage) -> Result<Vec<u8>, ExportError> {
+    use image::ImageEncoder;
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new_with_quality(
+        &mut png,
+        image::codecs::png::CompressionType::Fast,
+        image::codecs::png::FilterType::Adaptive,
+    )
+    .write_image(
+        image.as_raw(),
+        image.width(),
+        image.height(),
+        image::ExtendedColorType::Rgb8,
+    )
+    .map_err(|e| ExportError::Internal(format!("PNG encoding: {e}")))?;
+    Ok(png)
 }
 
 fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ExportError> {

@@ -127,16 +127,16 @@ impl MorphAnimation {
                     }
                 }
             }
-            for (r, &k) in keys.iter().enumerate() {
-                for ((delta, &w), &m) in named.deltas.iter().zip(&named.weights[k]).zip(&mean_w) {
-                    let w = w as f64 - m;
-                    for (v, d) in delta.iter().enumerate() {
-                        for c in 0..3 {
-                            rows[(r, 3 * v + c)] -= w * d[c];
-                        }
-                    }
-                }
-                weights[r].extend_from_slice(&named.weights[k]);
+            // rows −= (W − w̄) · B, frames × targets times targets × 3n.
+            let centred = Mat::<f64>::from_fn(keys.len(), named.deltas.len(), |r, j| {
+                named.weights[keys[r]][j] as f64 - mean_w[j]
+            });
+            let shapes = Mat::<f64>::from_fn(named.deltas.len(), 3 * n, |j, i| {
+                named.deltas[j][i / 3][i % 3]
+            });
+            rows -= &centred * &shapes;
+            for (w, &k) in weights.iter_mut().zip(&keys) {
+                w.extend_from_slice(&named.weights[k]);
             }
             names.extend(named.names.iter().cloned());
             targets.extend(named.deltas.iter().map(|d| to_f32(d)));
@@ -269,7 +269,10 @@ fn held_poses(capture: &Capture) -> Vec<RigidTransform> {
 }
 
 /// The leading principal components of the rows of `d` (frames × 3n, centred) that bring the
-/// RMS vertex error under [`RESIDUAL_TOLERANCE_M`], and each row's coefficients.
+/// RMS vertex error under [`RESIDUAL_TOLERANCE_M`], and each row's coefficients. From the
+/// eigenvectors of the frames' Gram matrix `D Dᵀ` (frames × frames: a clip has far fewer
+/// frames than coordinates), on at most [`BASIS_FRAMES`] evenly spaced frames; every frame is
+/// then projected onto the components.
 fn principal_components(d: &Mat<f64>, n: usize) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
     let frames = d.nrows();
     let pick: Vec<usize> = if frames <= BASIS_FRAMES {
@@ -280,33 +283,38 @@ fn principal_components(d: &Mat<f64>, n: usize) -> (Vec<Vec<f64>>, Vec<Vec<f64>>
             .collect()
     };
     let sample = Mat::<f64>::from_fn(pick.len(), d.ncols(), |i, j| d[(pick[i], j)]);
-    let Ok(svd) = sample.thin_svd() else {
+    let gram = &sample * sample.transpose();
+    let Ok(eigen) = gram.self_adjoint_eigen(faer::Side::Lower) else {
         return (Vec::new(), vec![Vec::new(); frames]);
     };
-    let (s, v) = (svd.S().column_vector(), svd.V());
-    let energy: Vec<f64> = (0..s.nrows()).map(|i| s[i] * s[i]).collect();
-    // Residual energy after k components, per vertex and frame of the sample.
+    let (u, s) = (eigen.U(), eigen.S().column_vector());
+    // Eigenvalues ascend: the largest last.
+    let energy: Vec<f64> = (0..s.nrows()).rev().map(|i| s[i].max(0.0)).collect();
     let denominator = (pick.len() * n).max(1) as f64;
     let mut left: f64 = energy.iter().sum();
     let mut k = 0;
     while k < energy.len().min(MAX_RESIDUAL_TARGETS)
         && (left / denominator).sqrt() > RESIDUAL_TOLERANCE_M
+        && energy[k] > 0.0
     {
         left -= energy[k];
         k += 1;
     }
-    let components: Vec<Vec<f64>> = (0..k)
-        .map(|j| (0..d.ncols()).map(|i| v[(i, j)]).collect())
-        .collect();
-    let coefficients = (0..frames)
-        .map(|r| {
-            components
-                .iter()
-                .map(|c| (0..d.ncols()).map(|i| d[(r, i)] * c[i]).sum())
-                .collect()
-        })
-        .collect();
-    (components, coefficients)
+    // Component j = sampleᵀ u_j / σ_j (unit length).
+    let last = s.nrows();
+    let u_k = Mat::<f64>::from_fn(pick.len(), k, |i, j| {
+        u[(i, last - 1 - j)] / energy[j].sqrt()
+    });
+    let basis = sample.transpose() * &u_k;
+    let coefficients = d * &basis;
+    (
+        (0..k)
+            .map(|j| (0..d.ncols()).map(|i| basis[(i, j)]).collect())
+            .collect(),
+        (0..frames)
+            .map(|r| (0..k).map(|j| coefficients[(r, j)]).collect())
+            .collect(),
+    )
 }
 
 /// RMS and largest vertex distance between the encoded and the captured surfaces (camera

@@ -80,17 +80,18 @@ impl Texture {
 
     /// A texture from an 8-bit sRGB image (alpha kept linear).
     pub fn from_rgba8(img: &image::RgbaImage) -> Texture {
+        // One conversion per byte value, not per texel (a 1024² texture took 0.6 s).
+        let linear: [u16; 256] = std::array::from_fn(|c| quantize(srgb_to_linear_u8(c as u8)));
         let texels = img
             .pixels()
             .map(|p| {
                 let [r, g, b, a] = p.0;
                 [
-                    srgb_to_linear_u8(r),
-                    srgb_to_linear_u8(g),
-                    srgb_to_linear_u8(b),
-                    a as f32 / 255.0,
+                    linear[r as usize],
+                    linear[g as usize],
+                    linear[b as usize],
+                    quantize(a as f32 / 255.0),
                 ]
-                .map(quantize)
             })
             .collect();
         Texture {
