@@ -27,6 +27,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         .with_context(|| format!("{}: cannot read the input", p.input.display()))?;
     let (input, reconstructor) = p.open()?;
     let bar = p.progress(&input);
+    // Ctrl-C ends the input; the figures cover the frames so far.
+    let input = input.stop_on(crate::interrupt::install());
     let outcome = reconstructor.run(input, &mut terminal(&bar));
     bar.finish_and_clear();
     if let Some(e) = outcome.error {
