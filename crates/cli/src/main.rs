@@ -57,6 +57,11 @@ enum Command {
     /// blendshapes.json, and the input again for the texture and the preview. Without flags:
     /// everything but the preview video.
     Export(commands::export::ExportCommandArgs),
+    /// Fair a mesh: Willmore-type smoothing with soft positional constraints
+    ///
+    /// Minimises ∫|Δv|² dA + γ ∫ w |v − p|² dA (paper Eq. 5.3 as corrected) by preconditioned
+    /// conjugate gradients; prints iterations, residual and the surface figures as JSON.
+    Fair(commands::fair::FairArgs),
     /// Time the factor-once solver at several mesh sizes (JSON)
     BenchSolver(commands::bench_solver::BenchSolverArgs),
     /// Render a mesh to a colour PNG and/or a 16-bit depth PNG
@@ -86,6 +91,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => commands::bench::run(args),
         Command::Fuse(args) => commands::fuse::run(args),
         Command::Export(args) => commands::export::run(args),
+        Command::Fair(args) => commands::fair::run(args),
         Command::BenchSolver(args) => commands::bench_solver::run(args),
         Command::Render(args) => commands::render::run(args),
         Command::Landmarks(args) => commands::landmarks::run(args),

@@ -9,6 +9,7 @@
 use rayon::prelude::*;
 use visage::{IctSource, ARKIT_BLENDSHAPES, ICT_TO_ARKIT};
 use visage_camera::RigidTransform;
+use visage_mesh::point_to_mesh::closest_point_barycentric;
 use visage_morphable::FaceModel;
 
 use crate::capture::Capture;
@@ -154,7 +155,7 @@ fn closest_point(
     for &(_, v) in nearest.iter().filter(|(d, _)| d.is_finite()) {
         for &t in &around[v] {
             let [a, b, c] = triangles[t].map(|i| vertices[i as usize]);
-            let bary = closest_on_triangle(a, b, c, p);
+            let bary = closest_point_barycentric(p, a, b, c);
             let q: [f64; 3] =
                 std::array::from_fn(|k| bary[0] * a[k] + bary[1] * b[k] + bary[2] * c[k]);
             let d = dist2(q, p);
@@ -181,72 +182,13 @@ fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
     (0..3).map(|k| (a[k] - b[k]).powi(2)).sum()
 }
 
-/// Barycentric coordinates of the point of triangle `abc` closest to `p` (Ericson, Real-Time
-/// Collision Detection, §5.1.5: Voronoi regions of the corners, edges and face).
-fn closest_on_triangle(a: [f64; 3], b: [f64; 3], c: [f64; 3], p: [f64; 3]) -> [f64; 3] {
-    let sub = |x: [f64; 3], y: [f64; 3]| -> [f64; 3] { std::array::from_fn(|k| x[k] - y[k]) };
-    let dot = |x: [f64; 3], y: [f64; 3]| -> f64 { (0..3).map(|k| x[k] * y[k]).sum() };
-    let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(p, a));
-    let (d1, d2) = (dot(ab, ap), dot(ac, ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return [1.0, 0.0, 0.0];
-    }
-    let bp = sub(p, b);
-    let (d3, d4) = (dot(ab, bp), dot(ac, bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return [0.0, 1.0, 0.0];
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return [1.0 - v, v, 0.0];
-    }
-    let cp = sub(p, c);
-    let (d5, d6) = (dot(ab, cp), dot(ac, cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return [0.0, 0.0, 1.0];
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return [1.0 - w, 0.0, w];
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return [0.0, 1.0 - w, w];
-    }
-    let denom = 1.0 / (va + vb + vc);
-    let (v, w) = (vb * denom, vc * denom);
-    [1.0 - v - w, v, w]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn closest_points_on_a_triangle_fall_in_the_right_region() {
+    fn the_closest_triangle_is_found_among_the_nearest_corners() {
         let (a, b, c) = ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
-        let near = |x: [f64; 3], y: [f64; 3]| (0..3).all(|k| (x[k] - y[k]).abs() < 1e-12);
-        // Above the face: straight down.
-        assert!(near(
-            closest_on_triangle(a, b, c, [0.25, 0.25, 3.0]),
-            [0.5, 0.25, 0.25]
-        ));
-        // Beyond a corner, beyond an edge.
-        assert!(near(
-            closest_on_triangle(a, b, c, [-1.0, -1.0, 0.0]),
-            [1.0, 0.0, 0.0]
-        ));
-        assert!(near(
-            closest_on_triangle(a, b, c, [0.5, -2.0, 1.0]),
-            [0.5, 0.5, 0.0]
-        ));
-        assert!(near(
-            closest_on_triangle(a, b, c, [1.0, 1.0, 0.0]),
-            [0.0, 0.5, 0.5]
-        ));
         let vertices = [a, b, c, [1.0, 1.0, 0.0]];
         let triangles = [[0, 1, 2], [1, 3, 2]];
         let around = triangles_around(4, &triangles);

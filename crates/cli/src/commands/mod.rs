@@ -5,6 +5,7 @@ pub mod bench_solver;
 pub mod eval;
 pub mod eval_video;
 pub mod export;
+pub mod fair;
 pub mod fuse;
 pub mod landmarks;
 pub mod model;
