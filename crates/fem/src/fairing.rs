@@ -37,9 +37,6 @@ pub enum Preconditioner {
     Cholesky,
 }
 
-/// A preconditioner's `r ← M⁻¹ r`.
-type Apply = dyn FnMut(&mut Mat<f64>);
-
 /// How to fair.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FairingOptions {
@@ -108,8 +105,15 @@ pub fn fair(
     let mut v = start.to_vec();
     let mut report = FairingReport::default();
     for _ in 0..options.outer_iterations.max(1) {
-        let system = FairingSystem::new(&v, triangles, weights, options.gamma)?;
-        let (next, iterations, residual) = system.solve(targets, &v, options)?;
+        let mut system = FairingSystem::new(
+            &v,
+            triangles,
+            weights,
+            options.gamma,
+            options.preconditioner,
+        )?;
+        let (next, iterations, residual) =
+            system.solve(targets, &v, options.tolerance, options.max_iterations);
         v = next;
         report.iterations.push(iterations);
         report.relative_residual = residual;
@@ -117,23 +121,51 @@ pub fn fair(
     Ok((v, report))
 }
 
-/// The frozen system `Q = Lᵀ A⁻¹ L + γ A W` and its right-hand side's scaling `γ A W`.
+/// The frozen system `Q = Lᵀ A⁻¹ L + γ A W`, its right-hand side's scaling `γ A W` and its
+/// preconditioner — built once, then solved for any number of targets (a sequence on a fixed
+/// mesh: one factorisation, a solve per frame).
 pub struct FairingSystem {
     q: SparseMatrix,
     /// `γ A_i w_i` per vertex.
     data: Vec<f64>,
+    preconditioner: Prepared,
+}
+
+/// A preconditioner ready to apply.
+enum Prepared {
+    /// `1 / Q_ii`.
+    Jacobi(Vec<f64>),
+    Cholesky(Box<Factorization>),
+}
+
+impl Prepared {
+    fn apply(&mut self, r: &mut Mat<f64>) {
+        match self {
+            Prepared::Jacobi(inverse) => {
+                for c in 0..r.ncols() {
+                    for (i, d) in inverse.iter().enumerate() {
+                        r[(i, c)] *= d;
+                    }
+                }
+            }
+            Prepared::Cholesky(factor) => factor.solve_in_place(r.as_mut()),
+        }
+    }
 }
 
 impl FairingSystem {
-    /// The operators measured on `points`.
+    /// The operators measured on `points`, and the preconditioner (the Cholesky one is
+    /// factored here).
     ///
     /// # Errors
-    /// A degenerate triangle or a vertex in no triangle.
+    /// A degenerate triangle, a vertex in no triangle, a singular system (a connected component
+    /// without any weight) for the Cholesky preconditioner.
     pub fn new(
         points: &[[f64; 3]],
         triangles: &[[u32; 3]],
         weights: &[f64],
         gamma: f64,
+        preconditioner: Preconditioner,
     ) -> Result<Self, FemError> {
         let l = cotan_laplacian(points, triangles)?;
         let area = mixed_areas(points, triangles);
@@ -164,54 +196,49 @@ impl FairingSystem {
             .collect();
         let positional = from_triplets(points.len(), &diagonal)?;
         let q = linear_combination(&[(1.0, &bending), (1.0, &positional)])?;
-        Ok(FairingSystem { q, data })
+        let preconditioner = match preconditioner {
+            Preconditioner::Jacobi => {
+                let mut inverse = vec![0.0; points.len()];
+                crate::sparse::for_each_entry(&q, |i, j, v| {
+                    if i == j && v > 0.0 {
+                        inverse[i] = 1.0 / v;
+                    }
+                });
+                Prepared::Jacobi(inverse)
+            }
+            Preconditioner::Cholesky => Prepared::Cholesky(Box::new(Factorization::new(&q)?)),
+        };
+        Ok(FairingSystem {
+            q,
+            data,
+            preconditioner,
+        })
     }
 
-    /// Solves `Q v = γ A W p` by PCG from `warm`: the solution, the iterations (the most over
-    /// x, y, z) and the relative residual (the largest).
-    ///
-    /// # Errors
-    /// The factorisation fails (the Cholesky preconditioner on a singular system).
+    /// Solves `Q v = γ A W p` by PCG from `warm` until the relative residual is under
+    /// `tolerance` (or `max_iterations`): the solution, the iterations (the most over x, y, z)
+    /// and the relative residual (the largest).
     pub fn solve(
-        &self,
+        &mut self,
         targets: &[[f64; 3]],
         warm: &[[f64; 3]],
-        options: &FairingOptions,
-    ) -> Result<(Vec<[f64; 3]>, usize, f64), FemError> {
+        tolerance: f64,
+        max_iterations: usize,
+    ) -> (Vec<[f64; 3]>, usize, f64) {
         let n = targets.len();
         let b = Mat::<f64>::from_fn(n, 3, |i, c| self.data[i] * targets[i][c]);
         let mut x = Mat::<f64>::from_fn(n, 3, |i, c| warm[i][c]);
-        let mut precondition: Box<Apply> = match options.preconditioner {
-            Preconditioner::Jacobi => {
-                let mut diag = vec![0.0; n];
-                crate::sparse::for_each_entry(&self.q, |i, j, v| {
-                    if i == j {
-                        diag[i] = v;
-                    }
-                });
-                Box::new(move |r: &mut Mat<f64>| {
-                    for c in 0..3 {
-                        for (i, d) in diag.iter().enumerate() {
-                            r[(i, c)] /= d.max(f64::MIN_POSITIVE);
-                        }
-                    }
-                })
-            }
-            Preconditioner::Cholesky => {
-                let mut factor = Factorization::new(&self.q)?;
-                Box::new(move |r: &mut Mat<f64>| factor.solve_in_place(r.as_mut()))
-            }
-        };
+        let preconditioner = &mut self.preconditioner;
         let (iterations, residual) = pcg(
             &self.q,
             &b,
             &mut x,
-            &mut *precondition,
-            options.tolerance,
-            options.max_iterations,
+            &mut |r: &mut Mat<f64>| preconditioner.apply(r),
+            tolerance,
+            max_iterations,
         );
         let v = (0..n).map(|i| [x[(i, 0)], x[(i, 1)], x[(i, 2)]]).collect();
-        Ok((v, iterations, residual))
+        (v, iterations, residual)
     }
 }
 
