@@ -6,9 +6,12 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use visage_fem::{FairingSystem, Preconditioner};
 
+/// A cap's vertices, triangles and noisy targets.
+type Cap = (Vec<[f64; 3]>, Vec<[u32; 3]>, Vec<[f64; 3]>);
+
 /// A 9 cm-radius cap, 60° from the pole, on a 43 × 44 latitude–longitude grid, with a ±0.3 mm
 /// ripple along the normals (phase `phase`) as the targets.
-fn cap(phase: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, Vec<[f64; 3]>) {
+fn cap(phase: f64) -> Cap {
     let (rings, segments, r) = (43usize, 44usize, 0.09);
     let mut v = Vec::new();
     let mut noisy = Vec::new();
