@@ -2,9 +2,15 @@
 //!
 //! - **mean |H|**: the mean over interior vertices of `|H_i| = ‖(L x)_i‖ / (2 A_i)`, with `L` the
 //!   cotangent Laplacian of the 3-D mesh (`(L x)_i = ½ Σ_j (cot α_ij + cot β_ij)(x_i − x_j)`,
-//!   Meyer et al. 2003) and `A_i` the barycentric area (a third of the incident triangles').
-//!   Units: 1/metre. The **curvature-improvement factor** is mean |H| of the raw surface divided
-//!   by mean |H| after regularisation.
+//!   Meyer et al. 2003) and `A_i` the mixed Voronoi area (the paper's `A_i` in (5.2); as
+//!   [`crate::surface_geometry`] computes them, equal to libigl's). Units: 1/metre. The
+//!   **curvature-improvement factor** is mean |H| of the raw surface divided by mean |H| after
+//!   regularisation. It can be below 1: mean |H| counts the real curvature of the face (a nose
+//!   tip bends at ~1/(5 mm)) as much as noise, so a surface whose noise is small next to its
+//!   shape — the face fit's surface, smooth by construction — has little to remove, and a
+//!   regularised surface that follows the features more sharply (or a fusion that adds real
+//!   detail the raw surface lacked) shows a factor at or below 1. It is a smoothing figure,
+//!   not an accuracy one: compare it with the error against ground truth (`visage eval`).
 //! - **roughness**: the mean over interior vertices of the angle (radians) between the vertex
 //!   normal and the normalised mean of its one-ring neighbours' normals. Vertex normals are
 //!   area-weighted face normals.
@@ -87,17 +93,28 @@ impl SurfaceMetrics {
             if double_area <= 0.0 {
                 continue;
             }
+            // cot of the angle at each corner.
+            let cot: [f64; 3] = std::array::from_fn(|k| {
+                let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+                dot(sub(p[i], p[k]), sub(p[j], p[k])) / double_area
+            });
+            let obtuse = cot.iter().position(|&c| c < 0.0);
             for k in 0..3 {
                 let (i, j) = ((k + 1) % 3, (k + 2) % 3);
-                let (ei, ej) = (sub(p[i], p[k]), sub(p[j], p[k]));
-                let half_cot = 0.5 * dot(ei, ej) / double_area;
+                let half_cot = 0.5 * cot[k];
                 let d = sub(p[i], p[j]);
                 let (vi, vj) = (t[i] as usize, t[j] as usize);
                 for (c, dc) in d.iter().enumerate() {
                     self.laplace[vi][c] += half_cot * dc;
                     self.laplace[vj][c] -= half_cot * dc;
                 }
-                self.area[t[k] as usize] += double_area / 6.0;
+                // The mixed Voronoi area (Meyer et al.; `crate::mixed_areas`).
+                let (e_ki, e_kj) = (sub(p[i], p[k]), sub(p[j], p[k]));
+                self.area[t[k] as usize] += match obtuse {
+                    Some(o) if o == k => double_area / 4.0,
+                    Some(_) => double_area / 8.0,
+                    None => 0.125 * (cot[j] * dot(e_ki, e_ki) + cot[i] * dot(e_kj, e_kj)),
+                };
                 for (acc, nc) in self.normals[t[k] as usize].iter_mut().zip(n) {
                     *acc += nc;
                 }

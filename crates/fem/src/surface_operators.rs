@@ -292,6 +292,16 @@ mod tests {
             assert!((total - surface_area(&v, &f)).abs() < 1e-12 * total.max(1.0));
         }
         assert!(errors[2] < errors[1] && errors[1] < errors[0], "{errors:?}");
+        // The run's figures use the same operators: mean |H| is these curvatures' mean.
+        let (v, f) = icosphere(3, r);
+        let g = surface_geometry(&v, &f);
+        let mean = g.mean_curvature.iter().sum::<f64>() / v.len() as f64;
+        let mut metrics = crate::SurfaceMetrics::new(v.len(), &f, &g.boundary);
+        let figures = metrics.evaluate(&v);
+        assert!(
+            (figures.mean_abs_h - mean).abs() < 1e-9 * mean,
+            "{figures:?} vs {mean}"
+        );
         assert!(errors[2] < 1e-5, "{errors:?}");
     }
 
