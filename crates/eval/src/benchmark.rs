@@ -530,6 +530,7 @@ pub fn methods(taubin_iterations: usize, anchored: bool) -> Vec<Method> {
         m.extend([
             Method::FaceAnchored,
             Method::FaceAnchoredClip,
+            Method::FaceAnchoredFaired,
             Method::ModelOnly,
             Method::ModelFusion,
         ]);

@@ -42,6 +42,10 @@ pub enum Method {
     /// Its whole-clip minimiser: [`visage_fem::solve_clip`] on the head-coordinate right-hand
     /// sides of the frames, from the streaming solutions.
     FaceAnchoredClip,
+    /// [`Method::FaceAnchored`] then fairing (paper §5, [`visage_fem::fair`]) of every frame
+    /// with a smoothing length of [`BENCHMARK_FAIRING_LENGTH_M`], the system measured on the
+    /// first frame and factored once, as `visage run --fair`.
+    FaceAnchoredFaired,
     /// The morphable model fitted to the tracked landmarks ([`visage_morphable::FaceFitter`]:
     /// pose, the clip's identity, the frame's expression), placed at the face's scale measured
     /// from the depth maps — the depth used for nothing else. Landmarks alone cannot see the
@@ -140,6 +144,7 @@ impl Method {
             Method::Taubin { .. } => "taubin",
             Method::FaceAnchored => "face_anchored",
             Method::FaceAnchoredClip => "face_anchored_clip",
+            Method::FaceAnchoredFaired => "face_anchored_faired",
             Method::ModelOnly => "model_only",
             Method::ModelFusion => "model_fusion",
             Method::RawFiltered(VertexFilter::Ema) => "raw_ema",
@@ -185,6 +190,14 @@ impl Method {
             Method::Clip => fused(setup()?, input, input.weights, Some(input.clip)),
             Method::FaceAnchored => face_anchored(input, &anchored()?, None),
             Method::FaceAnchoredClip => face_anchored(input, &anchored()?, Some(input.clip)),
+            Method::FaceAnchoredFaired => {
+                let a = anchored()?;
+                let mut run = face_anchored(input, &a, None)?;
+                let start = Instant::now();
+                fair_frames(&mut run.solutions, &a.domain.triangles)?;
+                run.seconds += start.elapsed().as_secs_f64();
+                Ok(run)
+            }
             Method::ModelOnly | Method::ModelFusion => {
                 let a = anchored()?;
                 let m = a.model.ok_or(EvalError::InvalidConfig {
@@ -196,6 +209,41 @@ impl Method {
             }
         }
     }
+}
+
+/// The smoothing length of [`Method::FaceAnchoredFaired`] (`visage run --fair 2`).
+pub const BENCHMARK_FAIRING_LENGTH_M: f64 = 0.002;
+
+/// Fairs every frame's surface in place: the system from the first frame, each solve from the
+/// previous result.
+fn fair_frames(solutions: &mut [Mat<f64>], triangles: &[[u32; 3]]) -> Result<(), EvalError> {
+    let points = |m: &Mat<f64>| -> Vec<[f64; 3]> {
+        (0..m.nrows()).map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]]).collect()
+    };
+    let Some(first) = solutions.first() else {
+        return Ok(());
+    };
+    let first = points(first);
+    let weights = vec![1.0; first.len()];
+    let mut system = visage_fem::FairingSystem::new(
+        &first,
+        triangles,
+        &weights,
+        BENCHMARK_FAIRING_LENGTH_M.powi(-4),
+        visage_fem::Preconditioner::Cholesky,
+    )?;
+    let mut warm = first;
+    for s in solutions.iter_mut() {
+        let targets = points(s);
+        let (faired, _, _) = system.solve(&targets, &warm, 1e-10, 200);
+        for (i, p) in faired.iter().enumerate() {
+            for c in 0..3 {
+                s[(i, c)] = p[c];
+            }
+        }
+        warm = faired;
+    }
+    Ok(())
 }
 
 /// Back-projection with in-painted holes, then `taubin` smoothing passes (0: none). A frame

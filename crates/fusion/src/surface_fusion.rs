@@ -14,7 +14,10 @@
 use faer::Mat;
 use serde::Serialize;
 use visage_camera::{DepthMap, Intrinsics, RigidTransform};
-use visage_fem::{ClipOptions, ClipReport, FusionSystem, SurfaceQuality, Weights};
+use visage_fem::{
+    boundary_vertices, ClipOptions, ClipReport, FairingSystem, FusionSystem, Preconditioner,
+    SurfaceMetrics, SurfaceQuality, Weights,
+};
 
 use crate::image_domain::{dilated_face_mask, dilation_radius};
 use crate::point_locator::PointLocator;
@@ -50,6 +53,8 @@ pub struct FusionParams {
     pub meshing: MeshingOptions,
     /// Depth beyond this (metres) counts as missing.
     pub max_depth_m: f64,
+    /// Fair each fused surface with this γ (1/m⁴; paper §5), or not.
+    pub fairing_gamma: Option<f64>,
 }
 
 /// The face template a face-anchored mesh is built on: the canonical FaceMesh's vertices
@@ -111,8 +116,25 @@ pub struct FaceFrame<'a> {
 pub struct FusedSurfaces {
     pub frame: FusedFrame,
     pub raw_quality: SurfaceQuality,
+    /// The result's: the faired surface's when fairing is on.
     pub fused_quality: SurfaceQuality,
+    /// Conjugate-gradient iterations of the fairing, when on.
+    pub fairing_iterations: Option<usize>,
 }
+
+/// Fairing after the fusion (paper §5): the system measured on a track's first fused surface
+/// (a head's rigid motion leaves `L` and `A` unchanged) and factored once, then one solve per
+/// frame from the previous result.
+struct Fairing {
+    gamma: f64,
+    system: Option<FairingSystem>,
+    metrics: Option<SurfaceMetrics>,
+    /// The last faired surface (empty: none yet in this track).
+    surface: Vec<[f64; 3]>,
+}
+
+/// Relative residual the per-frame fairing solves to.
+const FAIRING_TOLERANCE: f64 = 1e-10;
 
 struct ImagePlane {
     fuser: ImagePlaneFuser,
@@ -134,6 +156,7 @@ pub struct SurfaceFusion {
     k: Intrinsics,
     /// Texture coordinates per mesh vertex (empty: none).
     uvs: Vec<[f64; 2]>,
+    fairing: Option<Fairing>,
 }
 
 /// Quality figures of a frame without a surface.
@@ -201,11 +224,18 @@ impl SurfaceFusion {
             }
             _ => Vec::new(),
         };
+        let fairing = params.fairing_gamma.map(|gamma| Fairing {
+            gamma,
+            system: None,
+            metrics: None,
+            surface: Vec::new(),
+        });
         Ok(SurfaceFusion {
             design,
             params,
             k,
             uvs,
+            fairing,
         })
     }
 
@@ -262,11 +292,18 @@ impl SurfaceFusion {
         if let Some(f) = self.fuser_mut() {
             f.reset();
         }
+        if let Some(fairing) = &mut self.fairing {
+            fairing.surface.clear();
+        }
     }
 
-    /// The last fused surface (#V, camera coordinates, metres).
+    /// The last fused surface (#V, camera coordinates, metres): the faired one when fairing
+    /// is on.
     pub fn fused(&self) -> &[[f64; 3]] {
-        self.fuser().map_or(&[], |f| f.solution())
+        match &self.fairing {
+            Some(f) if !f.surface.is_empty() => &f.surface,
+            _ => self.fuser().map_or(&[], |f| f.solution()),
+        }
     }
 
     /// The last raw surface on the same mesh (holes as the solver filled them).
@@ -321,15 +358,63 @@ impl SurfaceFusion {
             }
             Design::Image(None) => unreachable!("built above"),
         };
-        let (raw_quality, fused_quality) = match self.fuser_mut() {
+        let (raw_quality, mut fused_quality) = match self.fuser_mut() {
             Some(f) if fused.status != FrameStatus::NoData => f.frame_quality(),
             _ => (NO_SURFACE, NO_SURFACE),
         };
+        let mut fairing_iterations = None;
+        if fused.status != FrameStatus::NoData {
+            if let Some((quality, iterations)) = self.fair()? {
+                fused_quality = quality;
+                fairing_iterations = Some(iterations);
+            }
+        }
         Ok(FusedSurfaces {
             frame: fused,
             raw_quality,
             fused_quality,
+            fairing_iterations,
         })
+    }
+
+    /// Fairs the fuser's current solution (when fairing is on): its quality and iterations.
+    fn fair(&mut self) -> Result<Option<(SurfaceQuality, usize)>, FusionError> {
+        let Some(solution) = self.fuser().map(|f| f.solution().to_vec()) else {
+            return Ok(None);
+        };
+        let triangles = match self.triangles() {
+            Some(t) => t.to_vec(),
+            None => return Ok(None),
+        };
+        let Some(fairing) = &mut self.fairing else {
+            return Ok(None);
+        };
+        let weights = vec![1.0; solution.len()];
+        if fairing.system.is_none() {
+            fairing.system = Some(FairingSystem::new(
+                &solution,
+                &triangles,
+                &weights,
+                fairing.gamma,
+                Preconditioner::Cholesky,
+            )?);
+            fairing.metrics = Some(SurfaceMetrics::new(
+                solution.len(),
+                &triangles,
+                &boundary_vertices(solution.len(), &triangles),
+            ));
+        }
+        let (Some(system), Some(metrics)) = (&mut fairing.system, &mut fairing.metrics) else {
+            return Ok(None);
+        };
+        let warm = if fairing.surface.len() == solution.len() {
+            std::mem::take(&mut fairing.surface)
+        } else {
+            solution.clone()
+        };
+        let (surface, iterations, _) = system.solve(&solution, &warm, FAIRING_TOLERANCE, 200);
+        fairing.surface = surface;
+        Ok(Some((metrics.evaluate(&fairing.surface), iterations)))
     }
 
     /// The fused and raw surfaces at the 468 landmark pixels `landmarks_px` (NaN where a
@@ -344,7 +429,7 @@ impl SurfaceFusion {
         raw.clear();
         match &self.design {
             Design::Face(f) => {
-                fused.extend_from_slice(&f.solution()[..landmarks_px.len()]);
+                fused.extend_from_slice(&self.fused()[..landmarks_px.len()]);
                 raw.extend_from_slice(&f.raw()[..landmarks_px.len()]);
             }
             Design::Model(f, landmarks) => {
@@ -359,7 +444,7 @@ impl SurfaceFusion {
                                 + offset[c]
                         })
                     };
-                    fused.push(at(f.solution()));
+                    fused.push(at(self.fused()));
                     raw.push(at(f.raw()));
                 }
             }
@@ -367,7 +452,7 @@ impl SurfaceFusion {
                 let missing = [f64::NAN; 3];
                 for &px in landmarks_px {
                     let locate = |s: &[[f64; 3]]| p.locator.interpolate(s, px).unwrap_or(missing);
-                    fused.push(locate(p.fuser.solution()));
+                    fused.push(locate(self.fused()));
                     raw.push(locate(p.fuser.raw()));
                 }
             }
@@ -409,12 +494,17 @@ impl SurfaceFusion {
     /// Makes a clip-solved frame the current surface (fused = its clip solution in camera
     /// coordinates, raw = its raw surface) and returns the raw and fused quality.
     pub fn load_clip_frame(&mut self, frame: &ClipFrame) -> (SurfaceQuality, SurfaceQuality) {
-        match self.fuser_mut() {
+        let (raw, fused) = match self.fuser_mut() {
             Some(f) => {
                 f.load_clip_solution(&frame.state, &frame.raw);
                 f.frame_quality()
             }
-            None => (NO_SURFACE, NO_SURFACE),
+            None => return (NO_SURFACE, NO_SURFACE),
+        };
+        // The clip frames come in order: the previous faired surface is the warm start.
+        match self.fair() {
+            Ok(Some((faired, _))) => (raw, faired),
+            _ => (raw, fused),
         }
     }
 

@@ -1,6 +1,6 @@
 //! The face-anchored fusion factors its matrices once per clip — head motion changes only the
 //! right-hand side — and a streaming frame allocates nothing. One test in its own binary: the
-//! allocation counter and the factorisation count are process-wide.
+//! factorisation count is process-wide.
 
 #[path = "common/counting_allocator.rs"]
 mod counting_allocator;

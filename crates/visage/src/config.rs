@@ -132,6 +132,7 @@ pub struct Builder {
     pub(crate) rest_pose: bool,
     pub(crate) landmark_smoothing: Option<f64>,
     pub(crate) latency: usize,
+    pub(crate) fairing_length_mm: Option<f64>,
 }
 
 impl Default for Builder {
@@ -152,6 +153,7 @@ impl Default for Builder {
             rest_pose: true,
             landmark_smoothing: Some(DEFAULT_LANDMARK_SMOOTHING),
             latency: DEFAULT_LATENCY_FRAMES,
+            fairing_length_mm: None,
         }
     }
 }
@@ -180,6 +182,13 @@ impl Builder {
     /// waits for at least [`crate::CLIP_LATENCY_FRAMES`].
     pub fn latency(mut self, frames: usize) -> Self {
         self.latency = frames;
+        self
+    }
+
+    /// Fairs every fused surface (paper §5, `visage fair`) with this smoothing length in
+    /// millimetres (`γ = ℓ⁻⁴`), or not (default). The system is factored once per run.
+    pub fn fairing(mut self, length_mm: Option<f64>) -> Self {
+        self.fairing_length_mm = length_mm;
         self
     }
 
@@ -308,6 +317,17 @@ impl Builder {
                 ..MeshingOptions::default()
             },
             max_depth_m: DEFAULT_MAX_DEPTH_M,
+            fairing_gamma: match self.fairing_length_mm {
+                None => None,
+                Some(l) if l.is_finite() && l > 0.0 => Some((l * 1e-3).powi(-4)),
+                Some(l) => {
+                    return Err(Error::InvalidOption {
+                        name: "--fair",
+                        value: l.to_string(),
+                        reason: "the smoothing length must be a positive number of millimetres",
+                    })
+                }
+            },
         })
     }
 

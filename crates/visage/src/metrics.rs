@@ -161,6 +161,10 @@ pub struct FrameMetrics {
     /// Mean distance (px) of the morphable-model fit's landmarks from the tracked ones.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub model_fit_px: Option<f64>,
+    /// Conjugate-gradient iterations of the fairing (with `--fair`; the fused quality figures
+    /// are then the faired surface's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fairing_iterations: Option<usize>,
 }
 
 impl FrameMetrics {
@@ -182,6 +186,7 @@ impl FrameMetrics {
             pose: None,
             fit_rms_px: None,
             model_fit_px: None,
+            fairing_iterations: None,
         }
     }
 

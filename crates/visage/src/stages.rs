@@ -503,6 +503,7 @@ impl FuseStage {
             frame,
             raw_quality,
             fused_quality,
+            fairing_iterations,
         } = self
             .fusion
             .process(&FaceFrame {
@@ -519,6 +520,7 @@ impl FuseStage {
         metrics.valid_fraction = frame.valid_fraction;
         metrics.relative_residual = frame.relative_residual;
         metrics.quality = FrameQuality::of(&raw_quality, &fused_quality);
+        metrics.fairing_iterations = fairing_iterations;
         Ok(())
     }
 

@@ -117,6 +117,10 @@ pub struct PipelineArgs {
     /// triangle).
     #[arg(long, default_value_t = DEFAULT_SUBDIVISION)]
     pub subdivision: usize,
+    /// Fair every fused surface (Willmore-type smoothing, as `visage fair`) with this smoothing
+    /// length in millimetres.
+    #[arg(long, value_name = "LENGTH_MM")]
+    pub fair: Option<f64>,
     /// Image mesh: grid spacing in pixels.
     #[arg(long, default_value_t = visage::MeshingOptions::default().spacing)]
     pub spacing: u32,
@@ -220,7 +224,8 @@ impl PipelineArgs {
             .spacing(self.spacing);
         builder = builder
             .landmark_smoothing(self.smoothing.0)
-            .latency(self.latency);
+            .latency(self.latency)
+            .fairing(self.fair);
         if let Some(lambda) = self.lambda {
             builder = builder.lambda(lambda);
         }
