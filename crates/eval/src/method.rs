@@ -218,7 +218,9 @@ pub const BENCHMARK_FAIRING_LENGTH_M: f64 = 0.002;
 /// previous result.
 fn fair_frames(solutions: &mut [Mat<f64>], triangles: &[[u32; 3]]) -> Result<(), EvalError> {
     let points = |m: &Mat<f64>| -> Vec<[f64; 3]> {
-        (0..m.nrows()).map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]]).collect()
+        (0..m.nrows())
+            .map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]])
+            .collect()
     };
     let Some(first) = solutions.first() else {
         return Ok(());
