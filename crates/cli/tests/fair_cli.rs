@@ -106,3 +106,45 @@ fn bad_fairing_input_names_the_problem() {
     assert_eq!(o.status.code(), Some(2));
     assert!(!out.exists());
 }
+
+/// `visage run --fair`: every meshed frame is faired (its iterations recorded) and the fused
+/// surface comes out smoother than without.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_run_with_fairing_records_it_and_is_smoother() {
+    let models = visage_testdata::require(visage_testdata::models_dir());
+    let clip =
+        visage_testdata::require(visage_testdata::shared_dir().join("data/video/lp_d18.mp4"));
+    let tmp = tempfile::tempdir().unwrap();
+    let mut roughness = Vec::new();
+    for (name, extra) in [("plain", &[][..]), ("faired", &["--fair", "2"][..])] {
+        let out = tmp.path().join(name);
+        let mut args = vec![
+            "run",
+            s(&clip),
+            "--out",
+            s(&out),
+            "--max-frames",
+            "6",
+            "--quiet",
+        ];
+        args.extend(["--models", s(&models)]);
+        args.extend(extra);
+        let o = visage(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap())
+                .unwrap();
+        let iterations = m["frames"][3]["fairing_iterations"].as_u64();
+        assert_eq!(
+            iterations.is_some(),
+            name == "faired",
+            "{name}: {iterations:?}"
+        );
+        roughness.push(m["summary"]["mean_roughness"].as_f64().unwrap());
+    }
+    assert!(roughness[1] < 0.8 * roughness[0], "roughness {roughness:?}");
+}
