@@ -36,7 +36,10 @@ pub use benchmark::{
     QUICK_EXPRESSIONS, TUNING_SALT,
 };
 pub use error::EvalError;
-pub use method::{AnchoredInput, Method, MethodInput, MethodRun, ModelInput, VertexKind};
+pub use method::{
+    AnchoredInput, Method, MethodInput, MethodRun, ModelInput, VertexKind,
+    BENCHMARK_FAIRING_LENGTH_M,
+};
 pub use metrics::{
     evaluate_sequence, moving_frames, MethodSummary, MetricAccumulator, PerFrame, Scored,
     VertexSet, VertexTruth,
