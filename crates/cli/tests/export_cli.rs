@@ -68,26 +68,9 @@ fn floats(json: &Value, bin: &[u8], accessor: usize) -> Vec<f32> {
         .collect()
 }
 
-/// Rotates `v` by the unit quaternion `[x, y, z, w]`.
+/// Rotates `v` by the unit quaternion `[x, y, z, w]` (glTF's order).
 fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
-    let [x, y, z, w] = q;
-    let m = [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - z * w),
-            2.0 * (x * z + y * w),
-        ],
-        [
-            2.0 * (x * y + z * w),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - x * w),
-        ],
-        [
-            2.0 * (x * z - y * w),
-            2.0 * (y * z + x * w),
-            1.0 - 2.0 * (x * x + y * y),
-        ],
-    ];
+    let m = visage_camera::quaternion_to_matrix([q[3], q[0], q[1], q[2]]);
     std::array::from_fn(|i| (0..3).map(|j| m[i][j] * v[j]).sum())
 }
 

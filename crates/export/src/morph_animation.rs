@@ -471,24 +471,7 @@ mod tests {
             [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]],
         ] {
             let [x, y, z, w] = quaternion(&r).map(|v| v as f64);
-            // The quaternion's matrix.
-            let m = [
-                [
-                    1.0 - 2.0 * (y * y + z * z),
-                    2.0 * (x * y - z * w),
-                    2.0 * (x * z + y * w),
-                ],
-                [
-                    2.0 * (x * y + z * w),
-                    1.0 - 2.0 * (x * x + z * z),
-                    2.0 * (y * z - x * w),
-                ],
-                [
-                    2.0 * (x * z - y * w),
-                    2.0 * (y * z + x * w),
-                    1.0 - 2.0 * (x * x + y * y),
-                ],
-            ];
+            let m = visage_camera::quaternion_to_matrix([w, x, y, z]);
             for i in 0..3 {
                 for j in 0..3 {
                     assert!((m[i][j] - r[i][j]).abs() < 1e-6, "{r:?} → {m:?}");

@@ -14,7 +14,7 @@ use image::RgbImage;
 use rayon::prelude::*;
 use visage_camera::{DepthKind, Intrinsics};
 use visage_mesh::color::{linear_to_srgb_u8, srgb_to_linear_u8};
-use visage_render::{Albedo, Camera, Frame, Mat3, Mat4, Renderer, Scene};
+use visage_render::{turn_about_centre, Albedo, Camera, Frame, Mat4, Renderer, Scene};
 use visage_video::{FrameSource, VideoWriter};
 
 use crate::{Capture, ExportError};
@@ -341,24 +341,6 @@ fn frame_rate(capture: &Capture) -> f64 {
     } else {
         FALLBACK_FPS
     }
-}
-
-/// `T(c) · R_y(angle) · T(−c)`: a turn about the camera's vertical axis through the centre `c`
-/// of the bounding box of `vertices`.
-fn turn_about_centre(vertices: &[[f64; 3]], angle: f64) -> Mat4 {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for v in vertices {
-        for k in 0..3 {
-            lo[k] = lo[k].min(v[k]);
-            hi[k] = hi[k].max(v[k]);
-        }
-    }
-    let c: [f64; 3] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
-    let r = Mat4::from_linear_translation(Mat3::rotation([0.0, 1.0, 0.0], angle), [0.0; 3]);
-    Mat4::translation(c)
-        .mul(&r)
-        .mul(&Mat4::translation([-c[0], -c[1], -c[2]]))
 }
 
 #[cfg(test)]

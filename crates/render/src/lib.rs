@@ -92,4 +92,4 @@ pub use projective::projective_uvs;
 pub use rasterize::{CullMode, Fragment, Rasterizer, ScreenTriangle, NO_TRIANGLE, TILE_ROWS};
 pub use shading::{blinn_phong, Light, Material, UNLIT};
 pub use texture::{Texture, Wrap};
-pub use turntable::turntable;
+pub use turntable::{turn_about_centre, turntable};

@@ -9,6 +9,17 @@ pub fn turntable(vertices: &[[f64; 3]], n: usize) -> Vec<Mat4> {
     if vertices.is_empty() {
         return Vec::new();
     }
+    (0..n)
+        .map(|k| turn_about_centre(vertices, std::f64::consts::TAU * k as f64 / n as f64))
+        .collect()
+}
+
+/// `T(c) · R_y(angle) · T(−c)`: a turn by `angle` about the camera's vertical axis through the
+/// centre `c` of the bounding box of `vertices` (the identity for no vertices).
+pub fn turn_about_centre(vertices: &[[f64; 3]], angle: f64) -> Mat4 {
+    if vertices.is_empty() {
+        return Mat4::IDENTITY;
+    }
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for v in vertices {
@@ -18,15 +29,10 @@ pub fn turntable(vertices: &[[f64; 3]], n: usize) -> Vec<Mat4> {
         }
     }
     let c: [f64; 3] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
-    (0..n)
-        .map(|k| {
-            let angle = std::f64::consts::TAU * k as f64 / n as f64;
-            let r = Mat4::from_linear_translation(Mat3::rotation([0.0, 1.0, 0.0], angle), [0.0; 3]);
-            Mat4::translation(c)
-                .mul(&r)
-                .mul(&Mat4::translation([-c[0], -c[1], -c[2]]))
-        })
-        .collect()
+    let r = Mat4::from_linear_translation(Mat3::rotation([0.0, 1.0, 0.0], angle), [0.0; 3]);
+    Mat4::translation(c)
+        .mul(&r)
+        .mul(&Mat4::translation([-c[0], -c[1], -c[2]]))
 }
 
 #[cfg(test)]

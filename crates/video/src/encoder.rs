@@ -10,7 +10,7 @@
 //! Why the command-line tool: the same reasons as for decoding (see the crate's docs) — no C
 //! libraries to build against, and an encoder crash cannot take the process down.
 
-use std::io::{Read, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, Command, Stdio};
 use std::thread::JoinHandle;
@@ -92,13 +92,7 @@ impl VideoWriter {
                 reason: e.to_string(),
             })?;
         let stdin = child.stdin.take();
-        let stderr = child.stderr.take().map(|mut e| {
-            std::thread::spawn(move || {
-                let mut s = String::new();
-                let _ = e.read_to_string(&mut s);
-                s
-            })
-        });
+        let stderr = crate::ffmpeg::collect_stderr(&mut child);
         Ok(VideoWriter {
             path: path.to_owned(),
             tmp,

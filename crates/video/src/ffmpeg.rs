@@ -197,13 +197,7 @@ impl VideoReader {
                 reason: e.to_string(),
             })?;
         let stdout = child.stdout.take();
-        let stderr = child.stderr.take().map(|mut e| {
-            std::thread::spawn(move || {
-                let mut s = String::new();
-                let _ = e.read_to_string(&mut s);
-                s
-            })
-        });
+        let stderr = collect_stderr(&mut child);
         Ok(VideoReader {
             path: path.to_owned(),
             info,
@@ -315,6 +309,18 @@ impl Drop for VideoReader {
             let _ = c.wait();
         }
     }
+}
+
+/// A thread collecting a child's standard error (so a full pipe never blocks it), for the
+/// error message when it fails.
+pub(crate) fn collect_stderr(child: &mut Child) -> Option<JoinHandle<String>> {
+    child.stderr.take().map(|mut e| {
+        std::thread::spawn(move || {
+            let mut s = String::new();
+            let _ = e.read_to_string(&mut s);
+            s
+        })
+    })
 }
 
 /// The option that makes `ffmpeg` pass every frame through once: `-fps_mode` (FFmpeg 5.1 and
