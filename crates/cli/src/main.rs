@@ -71,6 +71,13 @@ enum Command {
     /// 468 FaceMesh landmarks per face and frame of images or videos, the metric head pose,
     /// and optionally the fitted face's depth maps (which `visage fuse --depth` reads).
     Landmarks(commands::landmarks::LandmarksArgs),
+    /// SIFT keypoints and descriptors of an image (JSON in OpenCV's conventions)
+    ///
+    /// Scale-space extrema of the difference of Gaussians with sub-pixel refinement, 36-bin
+    /// orientations and 128-byte descriptors (Lowe 2004, as OpenCV computes them).
+    Keypoints(commands::keypoints::KeypointsArgs),
+    /// SIFT matches between two images (ratio test and mutual check)
+    Match(commands::matches::MatchArgs),
     /// Fetch or check the pinned MediaPipe model files
     ///
     /// Apache-2.0 model files from the npm package @mediapipe/face_mesh, sha256-checked.
@@ -95,6 +102,8 @@ fn main() -> ExitCode {
         Command::BenchSolver(args) => commands::bench_solver::run(args),
         Command::Render(args) => commands::render::run(args),
         Command::Landmarks(args) => commands::landmarks::run(args),
+        Command::Keypoints(args) => commands::keypoints::run(args),
+        Command::Match(args) => commands::matches::run(args),
         Command::Models(args) => commands::models::run(args),
         Command::Model(args) => commands::model::run(args),
         Command::Eval(args) => commands::eval::run(args),
