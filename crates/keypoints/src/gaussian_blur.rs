@@ -36,7 +36,11 @@ impl GaussianKernel {
 }
 
 /// OpenCV's `BORDER_REFLECT_101` (`gfedcb|abcdefgh|gfedcba`) for an index `i` of a line of `n`.
+#[inline]
 fn reflect101(i: isize, n: usize) -> usize {
+    if i >= 0 && (i as usize) < n {
+        return i as usize;
+    }
     if n == 1 {
         return 0;
     }

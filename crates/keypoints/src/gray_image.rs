@@ -7,6 +7,12 @@ const GRAY_B: u32 = 1868;
 const GRAY_SHIFT: u32 = 14;
 const GRAY_HALF: u32 = 1 << (GRAY_SHIFT - 1);
 
+/// The grey level of an RGB pixel.
+fn luma(p: &[u8]) -> f32 {
+    let [r, g, b] = [p[0], p[1], p[2]].map(u32::from);
+    ((GRAY_R * r + GRAY_G * g + GRAY_B * b + GRAY_HALF) >> GRAY_SHIFT) as f32
+}
+
 /// A grey image, row-major, intensities in 0–255 as `f32` (OpenCV's `CV_32F` SIFT input).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct GrayImage {
@@ -41,16 +47,36 @@ impl GrayImage {
         if rgb.len() != 3 * width * height {
             return None;
         }
-        let data = rgb
-            .chunks_exact(3)
-            .map(|p| {
-                let [r, g, b] = [p[0], p[1], p[2]].map(u32::from);
-                ((GRAY_R * r + GRAY_G * g + GRAY_B * b + GRAY_HALF) >> GRAY_SHIFT) as f32
-            })
-            .collect();
+        let data = rgb.chunks_exact(3).map(luma).collect();
         Some(GrayImage {
             width,
             height,
+            data,
+        })
+    }
+
+    /// Grey (as [`GrayImage::from_rgb8`]) of the region `[x0, x0 + w) × [y0, y0 + h)` of an 8-bit
+    /// RGB image of `width × height` pixels, clipped to the image; `None` when the buffer's
+    /// length is not `3 · width · height`. Converts only the region: a face in a video frame.
+    pub fn from_rgb8_region(
+        width: usize,
+        height: usize,
+        rgb: &[u8],
+        [x0, y0, w, h]: [usize; 4],
+    ) -> Option<Self> {
+        if rgb.len() != 3 * width * height {
+            return None;
+        }
+        let (x0, y0) = (x0.min(width), y0.min(height));
+        let (w, h) = (w.min(width - x0), h.min(height - y0));
+        let mut data = Vec::with_capacity(w * h);
+        for y in y0..y0 + h {
+            let row = &rgb[3 * (y * width + x0)..3 * (y * width + x0 + w)];
+            data.extend(row.chunks_exact(3).map(luma));
+        }
+        Some(GrayImage {
+            width: w,
+            height: h,
             data,
         })
     }
@@ -109,5 +135,24 @@ impl GrayImage {
             out.data[y * width..(y + 1) * width].copy_from_slice(&self.row(y0 + y)[x0..x0 + width]);
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_region_converts_like_the_whole_image() {
+        let (w, h) = (7, 5);
+        let rgb: Vec<u8> = (0..3 * w * h).map(|i| (i * 37 % 256) as u8).collect();
+        let whole = GrayImage::from_rgb8(w, h, &rgb).unwrap();
+        let region = GrayImage::from_rgb8_region(w, h, &rgb, [2, 1, 4, 10]).unwrap();
+        assert_eq!((region.width(), region.height()), (4, 4));
+        assert_eq!(region, whole.crop(2, 1, 4, 4));
+        // OpenCV's levels: pure red 255 → 76, green → 150, blue → 29.
+        let prim = GrayImage::from_rgb8(3, 1, &[255, 0, 0, 0, 255, 0, 0, 0, 255]).unwrap();
+        assert_eq!(prim.data(), &[76.0, 150.0, 29.0]);
+        assert!(GrayImage::from_rgb8_region(w, h, &rgb[1..], [0, 0, 1, 1]).is_none());
     }
 }

@@ -61,6 +61,17 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
     if !(args.ratio > 0.0 && args.ratio <= 1.0) {
         anyhow::bail!("--ratio {} must lie in (0, 1]", args.ratio);
     }
+    if args.draw.is_some() {
+        if let Some(json) = [&args.a, &args.b]
+            .into_iter()
+            .find(|p| is_keypoints_file(p))
+        {
+            anyhow::bail!(
+                "--draw needs two images, not keypoints files ({})",
+                json.display()
+            );
+        }
+    }
     let mut sift = args.sift.detector()?;
     let (fa, a) = features(&args.a, &mut sift)?;
     let (fb, b) = features(&args.b, &mut sift)?;
@@ -128,10 +139,7 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
 
 /// The features of an image, or those a keypoints file holds (then without the image).
 fn features(path: &Path, sift: &mut Sift) -> anyhow::Result<(Features, Option<RgbImage>)> {
-    let is_json = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
-    if is_json {
+    if is_keypoints_file(path) {
         let (file, descriptors) = read_keypoints(path)?;
         let features = Features {
             keypoints: file.keypoints,
@@ -141,6 +149,12 @@ fn features(path: &Path, sift: &mut Sift) -> anyhow::Result<(Features, Option<Rg
     }
     let image = load(path)?;
     Ok((sift.detect_and_compute(&image.gray), Some(image.rgb)))
+}
+
+/// Whether `path` names a keypoints file (`.json`) rather than an image.
+fn is_keypoints_file(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
 }
 
 /// A colour per match, cycling through saturated hues.
