@@ -110,6 +110,8 @@ pub struct Parameters {
     pub landmark_smoothing: Option<f64>,
     /// Frames the landmark smoother waits for before giving a frame out.
     pub latency_frames: usize,
+    /// Whether SIFT keypoints check the head's motion.
+    pub keypoint_motion: bool,
 }
 
 /// Sets up a [`crate::Reconstructor`]. Every option has a default: the face mesh on the face
@@ -133,6 +135,7 @@ pub struct Builder {
     pub(crate) landmark_smoothing: Option<f64>,
     pub(crate) latency: usize,
     pub(crate) fairing_length_mm: Option<f64>,
+    pub(crate) keypoint_motion: bool,
 }
 
 impl Default for Builder {
@@ -154,6 +157,7 @@ impl Default for Builder {
             landmark_smoothing: Some(DEFAULT_LANDMARK_SMOOTHING),
             latency: DEFAULT_LATENCY_FRAMES,
             fairing_length_mm: None,
+            keypoint_motion: false,
         }
     }
 }
@@ -189,6 +193,15 @@ impl Builder {
     /// millimetres (`γ = ℓ⁻⁴`), or not (default). The system is factored once per run.
     pub fn fairing(mut self, length_mm: Option<f64>) -> Self {
         self.fairing_length_mm = length_mm;
+        self
+    }
+
+    /// Checks every frame's head motion against SIFT keypoints on the face (matched with the
+    /// previous frame's, lifted onto the fitted surface, a rigid motion by RANSAC) and records
+    /// the disagreement per frame (`FrameMetrics::keypoint_motion`). Off by default: a few
+    /// milliseconds a frame.
+    pub fn keypoint_motion(mut self, on: bool) -> Self {
+        self.keypoint_motion = on;
         self
     }
 

@@ -50,6 +50,7 @@ mod error;
 mod gaze;
 mod histogram;
 mod input;
+mod keypoint_motion;
 mod landmark_smoothing;
 mod landmarks;
 mod lid_gate;
@@ -81,14 +82,17 @@ pub use depth_folder::{fuse_depth_folder, FuseOptions};
 pub use error::Error;
 pub use gaze::{eye_gaze, eye_look_weights, EyeGaze};
 pub use input::{Input, KeptFrames};
+pub use keypoint_motion::{
+    KeypointMotionMetrics, FACE_MARGIN, INLIER_THRESHOLD_M, MAX_FACE_KEYPOINTS, MIN_INLIERS,
+};
 pub use landmark_smoothing::{
     CLIP_LATENCY_FRAMES, DEFAULT_DISTANCE_SMOOTHING, DEFAULT_FRAME_INTERVAL_S,
     DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES, MAX_LATENCY_FRAMES,
 };
 pub use landmarks::{FaceRecord, LandmarksFrame, PoseRecord};
 pub use metrics::{
-    FrameMetrics, FrameQuality, FrameStatus, MeshSummary, Percentiles, PoseMetrics, Report,
-    RunStatus, RunSummary, RunTiming, SolverSummary, StageTimes,
+    FrameMetrics, FrameQuality, FrameStatus, KeypointMotionSummary, MeshSummary, Percentiles,
+    PoseMetrics, Report, RunStatus, RunSummary, RunTiming, SolverSummary, StageTimes,
 };
 pub use output::{
     camera_to_y_up, OutputDir, CACHE_MATERIAL, CACHE_MATERIAL_FILE, CACHE_MESH_FILE,

@@ -7,6 +7,7 @@ use serde::Serialize;
 use visage_camera::{Intrinsics, RigidTransform};
 use visage_fem::{ClipReport, SurfaceQuality};
 
+use crate::keypoint_motion::KeypointMotionMetrics;
 use crate::quality::QualitySummary;
 
 /// Outcome of one frame.
@@ -82,12 +83,22 @@ pub struct StageTimes {
     pub fuse: f64,
     /// Writing the mesh(es) and the landmarks record.
     pub write: f64,
+    /// The keypoint check of the head's motion (with keypoints on; 0 otherwise).
+    pub keypoints: f64,
 }
 
 impl StageTimes {
-    pub const NAMES: [&'static str; 6] = ["decode", "track", "fit", "depth", "fuse", "write"];
+    pub const NAMES: [&'static str; 7] = [
+        "decode",
+        "track",
+        "fit",
+        "depth",
+        "fuse",
+        "write",
+        "keypoints",
+    ];
 
-    pub fn values(&self) -> [f64; 6] {
+    pub fn values(&self) -> [f64; 7] {
         [
             self.decode,
             self.track,
@@ -95,6 +106,7 @@ impl StageTimes {
             self.depth,
             self.fuse,
             self.write,
+            self.keypoints,
         ]
     }
 }
@@ -165,6 +177,10 @@ pub struct FrameMetrics {
     /// are then the faired surface's).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fairing_iterations: Option<usize>,
+    /// SIFT keypoints' check of the head's motion since the previous frame (with keypoints
+    /// on, from a face's second frame).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub keypoint_motion: Option<KeypointMotionMetrics>,
 }
 
 impl FrameMetrics {
@@ -187,6 +203,7 @@ impl FrameMetrics {
             fit_rms_px: None,
             model_fit_px: None,
             fairing_iterations: None,
+            keypoint_motion: None,
         }
     }
 
@@ -256,6 +273,69 @@ pub struct RunSummary {
     pub mean_roughness_raw: f64,
     pub mean_roughness: f64,
     pub quality: QualitySummary,
+    /// The keypoint check of the head's motion over the run (with keypoints on).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub keypoint_motion: Option<KeypointMotionSummary>,
+}
+
+/// The keypoint check over a run: how often it could estimate the motion and how far that
+/// motion was from the landmark pose's.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct KeypointMotionSummary {
+    /// Frames compared with their predecessor.
+    pub frames: usize,
+    /// Of those, frames with a motion estimate.
+    pub estimated: usize,
+    /// Medians per compared frame.
+    pub median_keypoints: f64,
+    pub median_matches: f64,
+    pub median_inliers: f64,
+    /// Median and 95th percentile of the disagreement over the estimated frames.
+    pub median_rotation_disagreement_deg: f64,
+    pub p95_rotation_disagreement_deg: f64,
+    pub median_translation_disagreement_mm: f64,
+    pub p95_translation_disagreement_mm: f64,
+}
+
+impl KeypointMotionSummary {
+    /// The summary of `frames`' records (`None` when no frame has one).
+    pub fn of(frames: &[FrameMetrics]) -> Option<Self> {
+        let records: Vec<&KeypointMotionMetrics> = frames
+            .iter()
+            .filter_map(|f| f.keypoint_motion.as_ref())
+            .collect();
+        if records.is_empty() {
+            return None;
+        }
+        let median = |v: Vec<f64>| Percentiles::of(v).median_ms;
+        let spread = |v: Vec<f64>| {
+            let p = Percentiles::of(v);
+            (p.median_ms, p.p95_ms)
+        };
+        let (rotation, rotation_p95) = spread(
+            records
+                .iter()
+                .filter_map(|r| r.rotation_disagreement_deg)
+                .collect(),
+        );
+        let (translation, translation_p95) = spread(
+            records
+                .iter()
+                .filter_map(|r| r.translation_disagreement_mm)
+                .collect(),
+        );
+        Some(KeypointMotionSummary {
+            frames: records.len(),
+            estimated: records.iter().filter(|r| r.rotation_deg.is_some()).count(),
+            median_keypoints: median(records.iter().map(|r| r.keypoints as f64).collect()),
+            median_matches: median(records.iter().map(|r| r.matches as f64).collect()),
+            median_inliers: median(records.iter().map(|r| r.inliers as f64).collect()),
+            median_rotation_disagreement_deg: rotation,
+            p95_rotation_disagreement_deg: rotation_p95,
+            median_translation_disagreement_mm: translation,
+            p95_translation_disagreement_mm: translation_p95,
+        })
+    }
 }
 
 impl RunSummary {
@@ -316,6 +396,7 @@ impl RunSummary {
             mean_roughness_raw: mean(&|f| f.quality.roughness_raw),
             mean_roughness: mean(&|f| f.quality.roughness),
             quality,
+            keypoint_motion: KeypointMotionSummary::of(frames),
         }
     }
 }

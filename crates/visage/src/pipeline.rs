@@ -29,6 +29,7 @@ use visage_video::Frame;
 
 use crate::animation::BlendshapeFrame;
 use crate::input::Decoded;
+use crate::keypoint_motion::KeypointMotion;
 use crate::landmarks::LandmarksFrame;
 use crate::metrics::{FrameMetrics, FrameQuality, RunTiming};
 use crate::process_stats::{cpu_seconds, peak_rss_mib};
@@ -65,6 +66,7 @@ enum ToSink {
 pub(crate) struct Stages {
     pub face: FaceStage,
     pub model: Option<ModelStage>,
+    pub keypoints: Option<KeypointMotion>,
     pub fuse: FuseStage,
     pub mode: TemporalMode,
     pub clip: ClipOptions,
@@ -84,6 +86,7 @@ pub(crate) fn run_stages(
     let Stages {
         mut face,
         mut model,
+        mut keypoints,
         mut fuse,
         mode,
         clip,
@@ -107,8 +110,8 @@ pub(crate) fn run_stages(
         let decode = scope.spawn(move || decode_stage(input, decoded_tx));
         let face = &mut face;
         let track = scope.spawn(move || track_stage(face, decoded_rx, tracked_tx));
-        let model = &mut model;
-        let modelling = scope.spawn(move || model_stage(model, tracked_rx, modelled_tx));
+        let (model, keypoints) = (&mut model, &mut keypoints);
+        let modelling = scope.spawn(move || model_stage(model, keypoints, tracked_rx, modelled_tx));
         let fusion = scope
             .spawn(move || fuse_stage(&mut fuse, mode, &clip, modelled_rx, fused_tx, recycle_rx));
         let sink_error = consumer.run(fused_rx, recycle_tx).err();
@@ -164,14 +167,19 @@ fn track_stage(
     Ok(())
 }
 
+/// The model fit and the keypoint check, on one thread.
 fn model_stage(
     model: &mut Option<ModelStage>,
+    keypoints: &mut Option<KeypointMotion>,
     input: Receiver<(Tracked, Frame)>,
     out: SyncSender<Tracked>,
 ) -> Result<(), Error> {
     for (mut tracked, frame) in input {
         if let Some(model) = model {
             model.fit(&frame.image, &mut tracked)?;
+        }
+        if let Some(keypoints) = keypoints {
+            keypoints.observe(&frame.image, &mut tracked);
         }
         drop(frame);
         if out.send(tracked).is_err() {

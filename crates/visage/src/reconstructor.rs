@@ -14,6 +14,7 @@ use visage_video::Frame;
 
 use crate::animation::{BlendshapeFrame, IctToArkit};
 use crate::config::{Builder, ModelSource, Parameters};
+use crate::keypoint_motion::KeypointMotion;
 use crate::landmark_smoothing::{
     DistanceSmoother, LandmarkSmoother, CLIP_LATENCY_FRAMES, DEFAULT_DISTANCE_SMOOTHING,
 };
@@ -39,6 +40,8 @@ pub struct Reconstructor {
     /// The fitted morphable model and its stage, if any.
     model: Option<Arc<FaceModel>>,
     model_stage: Option<ModelStage>,
+    /// The keypoint check of the head's motion, when on.
+    keypoints: Option<KeypointMotion>,
     setup_ms: f64,
     recorder: Recorder,
     /// The last frame's results (reused buffers).
@@ -241,6 +244,7 @@ impl Reconstructor {
             model: model_name,
             landmark_smoothing: smoothing,
             latency_frames: if smoothing.is_some() { latency } else { 0 },
+            keypoint_motion: builder.keypoint_motion,
         };
         let model_mesh = TriMesh::new(
             Vec::new(),
@@ -278,6 +282,9 @@ impl Reconstructor {
             },
             model_stage,
             model,
+            keypoints: builder
+                .keypoint_motion
+                .then(|| KeypointMotion::new(k, Arc::clone(&canonical))),
             fuse: FuseStage {
                 k,
                 canonical,
@@ -333,6 +340,9 @@ impl Reconstructor {
         if let Some(model) = &mut self.model_stage {
             model.fit(&frame.image, &mut tracked)?;
         }
+        if let Some(keypoints) = &mut self.keypoints {
+            keypoints.observe(&frame.image, &mut tracked);
+        }
         self.fuse.fuse(&mut tracked)?;
         let has_mesh = tracked.metrics.has_mesh();
         let position = self.recorder.push(tracked.metrics);
@@ -382,6 +392,7 @@ impl Reconstructor {
             mesh,
             model,
             model_stage,
+            keypoints,
             ..
         } = self;
         let k = face.k;
@@ -390,6 +401,7 @@ impl Reconstructor {
         let stages = Stages {
             face,
             model: model_stage,
+            keypoints,
             fuse,
             mode,
             clip,

@@ -121,6 +121,11 @@ pub struct PipelineArgs {
     /// length in millimetres.
     #[arg(long, value_name = "LENGTH_MM")]
     pub fair: Option<f64>,
+    /// Check every frame's head motion against SIFT keypoints on the face (matched with the
+    /// previous frame's, lifted onto the fitted face, a rigid motion by RANSAC); metrics.json
+    /// records the disagreement per frame and over the run. A few milliseconds a frame.
+    #[arg(long)]
+    pub keypoints: bool,
     /// Image mesh: grid spacing in pixels.
     #[arg(long, default_value_t = visage::MeshingOptions::default().spacing)]
     pub spacing: u32,
@@ -225,7 +230,8 @@ impl PipelineArgs {
         builder = builder
             .landmark_smoothing(self.smoothing.0)
             .latency(self.latency)
-            .fairing(self.fair);
+            .fairing(self.fair)
+            .keypoint_motion(self.keypoints);
         if let Some(lambda) = self.lambda {
             builder = builder.lambda(lambda);
         }
