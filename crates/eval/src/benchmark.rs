@@ -17,6 +17,7 @@ use crate::metrics::{
 };
 use crate::model_fit::{self, benchmark_face_model, ModelFitSummary};
 use crate::noise::{NoiseGenerator, NoiseModel};
+use crate::sift_anchors::{sift_anchors, SiftAnchorInfo, SiftAnchorOptions};
 use crate::simulated_tracker::{simulate_tracking, TrackedSequence, TrackerNoise};
 use crate::synthesis::{synthesize, SynthesisConfig, SyntheticSequence};
 use crate::vertex_filter::VertexFilter;
@@ -76,6 +77,13 @@ pub struct BenchmarkConfig {
     pub max_depth_m: f64,
     /// Taubin iteration counts tried on the tuning sequence.
     pub taubin_candidates: Vec<usize>,
+    /// The methods to score, by [`Method::name`] (`None`: the default list, [`methods`]);
+    /// `raw` is always scored (first: the curvature reference), the others in table order.
+    /// The only way to score an [`OPT_IN_METHODS`] one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub methods: Option<Vec<String>>,
+    /// SIFT settings of [`Method::StreamingSiftAnchors`].
+    pub sift_anchors: SiftAnchorOptions,
     /// The modes imported from the model (recorded for reproducibility).
     #[serde(skip)]
     pub import: ImportOptions,
@@ -111,6 +119,8 @@ impl BenchmarkConfig {
             clip: ClipOptions::default(),
             max_depth_m: DEFAULT_MAX_DEPTH_M,
             taubin_candidates: vec![0, 1, 2, 3, 5, 8, 12, 20, 30, 50],
+            methods: None,
+            sift_anchors: SiftAnchorOptions::default(),
             import: ImportOptions::default(),
             identity_modes: 0,
             expression_modes: Vec::new(),
@@ -168,6 +178,23 @@ impl BenchmarkConfig {
                 name: "max_depth_m",
                 value: self.max_depth_m.to_string(),
                 reason: "must be positive",
+            });
+        }
+        if let Some(names) = &self.methods {
+            let known = all_methods(0, true);
+            if let Some(bad) = names.iter().find(|n| !known.iter().any(|m| m.name() == *n)) {
+                return Err(EvalError::InvalidConfig {
+                    name: "methods",
+                    value: bad.clone(),
+                    reason: "not a method of the benchmark",
+                });
+            }
+        }
+        if self.sift_anchors.max_keypoints == Some(0) {
+            return Err(EvalError::InvalidConfig {
+                name: "sift_anchors.max_keypoints",
+                value: "0".into(),
+                reason: "must be at least 1",
             });
         }
         Ok(())
@@ -261,6 +288,9 @@ pub struct SequenceInfo {
     /// Vertices of the image-plane mesh shared by the methods.
     pub mesh_vertices: usize,
     pub domain_pixels: usize,
+    /// The SIFT anchors, when [`Method::StreamingSiftAnchors`] ran.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sift_anchors: Option<SiftAnchorInfo>,
 }
 
 /// Everything `results.json` holds.
@@ -289,6 +319,28 @@ pub struct PreparedSequence<'a> {
     pub reference: DepthMap,
     pub anchoring: Option<&'a FaceAnchoring>,
     pub tracking: Option<TrackedSequence>,
+    /// The SIFT anchors and the mesh they make ([`PreparedSequence::add_sift_anchors`];
+    /// `None`: [`Method::StreamingSiftAnchors`] cannot run).
+    pub sift: Option<SiftAnchoring>,
+}
+
+/// A sequence's SIFT anchors ([`sift_anchors`] on its first frame) and the image-plane mesh
+/// with them added, which [`Method::StreamingSiftAnchors`] builds the same way.
+#[derive(Debug)]
+pub struct SiftAnchoring {
+    /// Keypoint positions, pixels.
+    pub points: Vec<[f64; 2]>,
+    pub setup: FusionSetup,
+}
+
+impl SiftAnchoring {
+    /// Keypoints found and vertices added.
+    pub fn info(&self) -> SiftAnchorInfo {
+        SiftAnchorInfo {
+            keypoints: self.points.len(),
+            vertices_added: self.setup.anchor_vertices,
+        }
+    }
 }
 
 impl<'a> PreparedSequence<'a> {
@@ -356,7 +408,23 @@ impl<'a> PreparedSequence<'a> {
             reference,
             anchoring,
             tracking,
+            sift: None,
         })
+    }
+
+    /// Finds the SIFT anchors of the first frame ([`BenchmarkConfig::sift_anchors`]) and
+    /// meshes the domain with them, for [`Method::StreamingSiftAnchors`].
+    pub fn add_sift_anchors(&mut self, config: &BenchmarkConfig) -> Result<(), EvalError> {
+        let points = sift_anchors(&self.truth, 0, &config.sift_anchors)?;
+        let setup = FusionSetup::with_anchors(
+            &self.truth.k,
+            &self.domain,
+            &self.reference,
+            &config.meshing,
+            &points,
+        )?;
+        self.sift = Some(SiftAnchoring { points, setup });
+        Ok(())
     }
 
     /// The methods' common input: `weights` for the image-plane fusion, `anchored_weights` for
@@ -392,6 +460,7 @@ impl<'a> PreparedSequence<'a> {
                         weights: model_weights,
                     }),
                 }),
+            sift_anchors: self.sift.as_ref().map(|s| s.points.as_slice()),
         }
     }
 
@@ -423,6 +492,19 @@ impl<'a> PreparedSequence<'a> {
             boundary: &setup.boundary,
             truth: &image_truth,
         };
+        let sift_truth = self
+            .sift
+            .as_ref()
+            .filter(|_| {
+                runs.iter()
+                    .any(|r| r.vertices == VertexKind::SiftAnchoredImagePlane)
+            })
+            .map(|s| (s, VertexTruth::image_plane(&self.truth, &s.setup)));
+        let sift = sift_truth.as_ref().map(|(s, truth)| VertexSet {
+            triangles: &s.setup.mesh.triangles,
+            boundary: &s.setup.boundary,
+            truth,
+        });
         let anchored_truth = self
             .anchoring
             .zip(self.tracking.as_ref())
@@ -451,6 +533,15 @@ impl<'a> PreparedSequence<'a> {
                         vertices: image,
                         solutions: &r.solutions,
                         raw: r.raw.as_deref().unwrap_or(&raw.solutions),
+                    },
+                    VertexKind::SiftAnchoredImagePlane => Scored {
+                        vertices: sift.ok_or(EvalError::InvalidConfig {
+                            name: "method",
+                            value: "streaming_sift_anchors".into(),
+                            reason: "scored on a sequence prepared without SIFT anchors",
+                        })?,
+                        solutions: &r.solutions,
+                        raw: r.raw.as_deref().unwrap_or(&r.solutions),
                     },
                     VertexKind::Anchored => Scored {
                         vertices: anchored.ok_or(EvalError::InvalidConfig {
@@ -514,7 +605,48 @@ pub fn tune_taubin(model: &IctModel, config: &BenchmarkConfig) -> Result<TaubinT
     })
 }
 
-/// The methods scored, in table order (the face-anchored ones when `anchored`).
+/// Methods scored only when named in [`BenchmarkConfig::methods`]: experiments that did not
+/// earn a place in the default table.
+pub const OPT_IN_METHODS: [Method; 1] = [Method::StreamingSiftAnchors];
+
+/// Every method the benchmark knows, in table order: [`methods`], then [`OPT_IN_METHODS`].
+fn all_methods(taubin_iterations: usize, anchored: bool) -> Vec<Method> {
+    let mut m = methods(taubin_iterations, anchored);
+    m.extend(OPT_IN_METHODS);
+    m
+}
+
+/// The methods `config` scores: [`methods`] without [`BenchmarkConfig::methods`]; with it,
+/// `raw` and the named ones, in table order.
+///
+/// # Errors
+/// A named face-anchored method without `anchored` (the model files).
+pub fn selected_methods(
+    config: &BenchmarkConfig,
+    taubin_iterations: usize,
+    anchored: bool,
+) -> Result<Vec<Method>, EvalError> {
+    let Some(names) = &config.methods else {
+        return Ok(methods(taubin_iterations, anchored));
+    };
+    let available = all_methods(taubin_iterations, anchored);
+    if let Some(missing) = names
+        .iter()
+        .find(|n| !available.iter().any(|m| m.name() == *n))
+    {
+        return Err(EvalError::InvalidConfig {
+            name: "methods",
+            value: missing.clone(),
+            reason: "unknown, or needs the face-anchored set-up (the model files)",
+        });
+    }
+    Ok(available
+        .into_iter()
+        .filter(|m| *m == Method::Raw || names.iter().any(|n| n == m.name()))
+        .collect())
+}
+
+/// The methods scored by default, in table order (the face-anchored ones when `anchored`).
 pub fn methods(taubin_iterations: usize, anchored: bool) -> Vec<Method> {
     let mut m = vec![
         Method::Raw,
@@ -552,7 +684,8 @@ pub fn run_benchmark(
     config.expression_modes = model.expression_names.clone();
     progress("tuning Taubin iterations on a separate seed");
     let taubin_tuning = tune_taubin(model, &config)?;
-    let methods = methods(taubin_tuning.iterations, anchoring.is_some());
+    let methods = selected_methods(&config, taubin_tuning.iterations, anchoring.is_some())?;
+    let with_sift = methods.contains(&Method::StreamingSiftAnchors);
     let mut accumulators = vec![MetricAccumulator::default(); methods.len()];
     let mut sequences = Vec::new();
     let mut model_scores = Vec::new();
@@ -563,7 +696,15 @@ pub fn run_benchmark(
             s + 1,
             config.sequences
         ));
-        let seq = PreparedSequence::new(model, anchoring, &config, seed)?;
+        let mut seq = PreparedSequence::new(model, anchoring, &config, seed)?;
+        if with_sift {
+            progress(&format!(
+                "sequence {}/{}: SIFT anchors",
+                s + 1,
+                config.sequences
+            ));
+            seq.add_sift_anchors(&config)?;
+        }
         if let (Some(a), Some(tracking)) = (anchoring, &seq.tracking) {
             progress(&format!(
                 "sequence {}/{}: face model fit",
@@ -601,6 +742,7 @@ pub fn run_benchmark(
             distance_m: seq.truth.distance_m,
             mesh_vertices: setup.vertex_count(),
             domain_pixels: seq.domain.count(),
+            sift_anchors: seq.sift.as_ref().map(SiftAnchoring::info),
         });
     }
     let names = methods.iter().map(|m| m.name().to_string());
@@ -682,4 +824,49 @@ pub fn run_sweep(
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn method_names_are_unique_and_opt_in_methods_stay_out_of_the_default_list() {
+        let all = all_methods(3, true);
+        let names: std::collections::BTreeSet<&str> = all.iter().map(Method::name).collect();
+        assert_eq!(names.len(), all.len(), "{names:?}");
+        assert_eq!(all.len(), 15);
+        for m in OPT_IN_METHODS {
+            assert!(!methods(3, true).contains(&m), "{}", m.name());
+        }
+        let config = BenchmarkConfig::quick();
+        assert_eq!(
+            selected_methods(&config, 3, true).unwrap(),
+            methods(3, true)
+        );
+    }
+
+    #[test]
+    fn a_selection_scores_raw_first_and_the_named_methods_in_table_order() {
+        let config = BenchmarkConfig {
+            methods: Some(vec!["streaming_sift_anchors".into(), "streaming".into()]),
+            ..BenchmarkConfig::quick()
+        };
+        config.validate().unwrap();
+        assert_eq!(
+            selected_methods(&config, 2, false).unwrap(),
+            [Method::Raw, Method::Streaming, Method::StreamingSiftAnchors]
+        );
+        let face = BenchmarkConfig {
+            methods: Some(vec!["face_anchored".into()]),
+            ..BenchmarkConfig::quick()
+        };
+        assert!(selected_methods(&face, 2, false).is_err());
+        assert_eq!(selected_methods(&face, 2, true).unwrap().len(), 2);
+        let unknown = BenchmarkConfig {
+            methods: Some(vec!["sift".into()]),
+            ..BenchmarkConfig::quick()
+        };
+        assert!(unknown.validate().is_err());
+    }
 }

@@ -22,6 +22,7 @@ pub mod model_fit;
 mod noise;
 mod normal;
 mod report;
+mod sift_anchors;
 pub mod simulated_tracker;
 mod synthesis;
 mod taubin;
@@ -30,10 +31,10 @@ mod vertex_filter;
 mod video_report;
 
 pub use benchmark::{
-    methods, mix_seed, run_benchmark, run_sweep, sequence_seed, tune_taubin, AnchoringInfo,
-    BenchmarkConfig, BenchmarkResults, FaceAnchoring, PreparedSequence, SequenceInfo, SweepPoint,
-    TaubinTuning, ANCHORED_SUBDIVISION, ANCHORED_WEIGHTS, BENCHMARK_LANDMARK_SMOOTHING,
-    QUICK_EXPRESSIONS, TUNING_SALT,
+    methods, mix_seed, run_benchmark, run_sweep, selected_methods, sequence_seed, tune_taubin,
+    AnchoringInfo, BenchmarkConfig, BenchmarkResults, FaceAnchoring, PreparedSequence,
+    SequenceInfo, SiftAnchoring, SweepPoint, TaubinTuning, ANCHORED_SUBDIVISION, ANCHORED_WEIGHTS,
+    BENCHMARK_LANDMARK_SMOOTHING, OPT_IN_METHODS, QUICK_EXPRESSIONS, TUNING_SALT,
 };
 pub use error::EvalError;
 pub use method::{
@@ -47,6 +48,7 @@ pub use metrics::{
 pub use noise::{NoiseGenerator, NoiseModel, NOISE_PRESETS};
 pub use normal::standard_normal;
 pub use report::{csv, sweep_table, table, write_results, write_sweep};
+pub use sift_anchors::{sift_anchors, SiftAnchorInfo, SiftAnchorOptions};
 pub use simulated_tracker::{
     simulate_tracking, TrackedSequence, TrackerNoise, BENCHMARK_LATENCY_FRAMES,
 };

@@ -32,6 +32,11 @@ pub enum Method {
     PerFrameBiharmonic,
     /// The paper's streaming fusion (ERRATA 4): `(M_D + λK + μM) s^k = b^k + μ M s^{k−1}`.
     Streaming,
+    /// [`Method::Streaming`] on the image-plane mesh with the SIFT keypoints of the first
+    /// frame's colour render added as vertices ([`MethodInput::sift_anchors`], paper §3's
+    /// "semantic anchors"). An experiment: scored only when asked for by name
+    /// ([`crate::OPT_IN_METHODS`]).
+    StreamingSiftAnchors,
     /// The exact whole-clip minimiser (ERRATA 1, 4, 5), PCG from the streaming solutions.
     Clip,
     /// [`Method::Raw`] followed by Taubin λ|μ smoothing with this many iterations.
@@ -64,6 +69,9 @@ pub enum Method {
 pub enum VertexKind {
     /// The image-plane mesh of the sequence (`FusionSetup`), the same for every such method.
     ImagePlane,
+    /// The image-plane mesh with the SIFT anchors added (`FusionSetup::with_anchors` on
+    /// [`MethodInput::sift_anchors`]).
+    SiftAnchoredImagePlane,
     /// The face-anchored mesh ([`AnchoredInput::domain`]).
     Anchored,
     /// The morphable model's face region ([`ModelInput::domain`]).
@@ -117,6 +125,8 @@ pub struct MethodInput<'a> {
     pub frames: &'a [DepthMap],
     /// Input of the face-anchored methods (`None`: they cannot run).
     pub anchored: Option<AnchoredInput<'a>>,
+    /// Anchor points of [`Method::StreamingSiftAnchors`] (pixels; `None`: it cannot run).
+    pub sift_anchors: Option<&'a [[f64; 2]]>,
 }
 
 /// A method's output on one sequence.
@@ -126,7 +136,8 @@ pub struct MethodRun {
     pub solutions: Vec<Mat<f64>>,
     pub vertices: VertexKind,
     /// Per frame, the raw surface at the same vertices when it differs from
-    /// [`Method::Raw`]'s (face-anchored methods); the reference of the curvature improvement.
+    /// [`Method::Raw`]'s (face-anchored methods, SIFT anchors); the reference of the curvature
+    /// improvement.
     pub raw: Option<Vec<Mat<f64>>>,
     /// Wall time of the per-frame work over the whole sequence, seconds (the fixed set-up —
     /// mesh, operators, factorisation — excluded; it is shared by every frame).
@@ -140,6 +151,7 @@ impl Method {
             Method::Raw => "raw",
             Method::PerFrameBiharmonic => "per_frame_biharmonic",
             Method::Streaming => "streaming",
+            Method::StreamingSiftAnchors => "streaming_sift_anchors",
             Method::Clip => "clip",
             Method::Taubin { .. } => "taubin",
             Method::FaceAnchored => "face_anchored",
@@ -168,10 +180,10 @@ impl Method {
             })
         };
         match *self {
-            Method::Raw => Ok(raw(setup()?, input, 0)),
-            Method::Taubin { iterations } => Ok(raw(setup()?, input, iterations)),
+            Method::Raw => Ok(raw(&setup()?, input, 0)),
+            Method::Taubin { iterations } => Ok(raw(&setup()?, input, iterations)),
             Method::RawFiltered(filter) => {
-                let mut run = raw(setup()?, input, 0);
+                let mut run = raw(&setup()?, input, 0);
                 let start = Instant::now();
                 run.solutions = filter.apply(&run.solutions);
                 run.seconds += start.elapsed().as_secs_f64();
@@ -187,6 +199,26 @@ impl Method {
                 None,
             ),
             Method::Streaming => fused(setup()?, input, input.weights, None),
+            Method::StreamingSiftAnchors => {
+                let anchors = input.sift_anchors.ok_or(EvalError::InvalidConfig {
+                    name: "method",
+                    value: self.name().into(),
+                    reason: "needs the SIFT anchors of the sequence",
+                })?;
+                let setup = FusionSetup::with_anchors(
+                    input.k,
+                    input.domain,
+                    input.reference,
+                    input.meshing,
+                    anchors,
+                )?;
+                // The raw surface on these vertices: the curvature improvement's reference.
+                let reference = raw(&setup, input, 0).solutions;
+                let mut run = fused(setup, input, input.weights, None)?;
+                run.vertices = VertexKind::SiftAnchoredImagePlane;
+                run.raw = Some(reference);
+                Ok(run)
+            }
             Method::Clip => fused(setup()?, input, input.weights, Some(input.clip)),
             Method::FaceAnchored => face_anchored(input, &anchored()?, None),
             Method::FaceAnchoredClip => face_anchored(input, &anchored()?, Some(input.clip)),
@@ -250,7 +282,7 @@ fn fair_frames(solutions: &mut [Mat<f64>], triangles: &[[u32; 3]]) -> Result<(),
 
 /// Back-projection with in-painted holes, then `taubin` smoothing passes (0: none). A frame
 /// without one valid vertex repeats the previous output (zeros at the start).
-fn raw(setup: FusionSetup, input: &MethodInput<'_>, taubin: usize) -> MethodRun {
+fn raw(setup: &FusionSetup, input: &MethodInput<'_>, taubin: usize) -> MethodRun {
     let n = setup.vertex_count();
     let (mut x, mut scratch) = (Mat::<f64>::zeros(n, 3), Mat::<f64>::zeros(n, 3));
     let mut valid = vec![false; n];

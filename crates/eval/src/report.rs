@@ -8,7 +8,14 @@ use crate::EvalError;
 use visage_plot::{heatmap_svg, line_chart_svg, Series};
 
 /// Table order of the methods (then any others, by name).
-const ORDER: [&str; 5] = ["raw", "per_frame_biharmonic", "taubin", "streaming", "clip"];
+const ORDER: [&str; 6] = [
+    "raw",
+    "per_frame_biharmonic",
+    "taubin",
+    "streaming",
+    "streaming_sift_anchors",
+    "clip",
+];
 
 fn ordered(results: &BenchmarkResults) -> Vec<&str> {
     let mut names: Vec<&str> = ORDER

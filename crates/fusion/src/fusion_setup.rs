@@ -46,6 +46,9 @@ pub struct FusionSetup {
     pub flatness_ratio: f64,
     /// Flips made by the depth-aware variant (`None` when the planar mesh was kept).
     pub depth_aware_flips: Option<usize>,
+    /// Vertices added at the caller's anchor points ([`FusionSetup::with_anchors`]; 0 from
+    /// [`FusionSetup::new`]).
+    pub anchor_vertices: usize,
     /// Per vertex: on the domain boundary.
     pub boundary: Vec<bool>,
     pub ring: OneRing,
@@ -65,13 +68,30 @@ impl FusionSetup {
         reference: &DepthMap,
         options: &MeshingOptions,
     ) -> Result<Self, FusionError> {
+        Self::with_anchors(k, domain, reference, options, &[])
+    }
+
+    /// [`FusionSetup::new`] with `anchors` (pixel positions `(u, v)`, e.g. keypoints — paper
+    /// §3's "semantic anchors") added as vertices after the grid and refinement samples, each
+    /// only inside `domain` and clear of the other samples ([`Samples::add_anchors`],
+    /// [`visage_mesh::ANCHOR_MIN_SEPARATION`]). No anchors give `new`'s mesh exactly.
+    ///
+    /// [`Samples::add_anchors`]: visage_mesh::Samples::add_anchors
+    pub fn with_anchors(
+        k: &Intrinsics,
+        domain: &Mask,
+        reference: &DepthMap,
+        options: &MeshingOptions,
+        anchors: &[[f64; 2]],
+    ) -> Result<Self, FusionError> {
         k.check_size(domain.width, domain.height)?;
         let sampling = SamplingOptions {
             spacing: options.spacing,
             refine_tolerance: options.refine_tolerance_m,
             ..Default::default()
         };
-        let samples = sample_domain(domain, Some((reference, k)), &sampling)?;
+        let mut samples = sample_domain(domain, Some((reference, k)), &sampling)?;
+        let anchor_vertices = samples.add_anchors(domain, anchors, options.spacing);
         let mut mesh = PlanarMesh::triangulate(&samples)?;
         let flatness_ratio = reference.flatness_ratio().unwrap_or(0.0);
         let depth_aware_flips = if options.triangulation.uses_depth(flatness_ratio) {
@@ -96,6 +116,7 @@ impl FusionSetup {
             rays: mesh.points.iter().map(|p| k.ray(p[0], p[1])).collect(),
             flatness_ratio,
             depth_aware_flips,
+            anchor_vertices,
             quadrature,
             ops,
             mesh,
@@ -216,4 +237,51 @@ fn reference_positions(mesh: &PlanarMesh, reference: &DepthMap, k: &Intrinsics) 
         .zip(&samples)
         .map(|(p, d)| k.backproject(p[0], p[1], d.unwrap_or(mean)))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use visage_camera::DepthKind;
+
+    use super::*;
+
+    /// A 48 × 40 bump, in the domain everywhere.
+    fn scene() -> (Intrinsics, Mask, DepthMap) {
+        let (w, h) = (48, 40);
+        let k = Intrinsics::from_fov(w, h, 60.0).unwrap();
+        let mut depth = DepthMap::empty(w, h, DepthKind::Z);
+        for v in 0..h {
+            for u in 0..w {
+                let (x, y) = (u as f64 - 24.0, v as f64 - 20.0);
+                depth.data[(v * w + u) as usize] =
+                    (0.6 - 0.02 * (-(x * x + y * y) / 100.0).exp()) as f32;
+            }
+        }
+        (k, Mask::filled(w, h, true), depth)
+    }
+
+    #[test]
+    fn anchors_become_vertices_and_none_give_the_plain_mesh() {
+        let (k, domain, depth) = scene();
+        let options = MeshingOptions::default();
+        let plain = FusionSetup::new(&k, &domain, &depth, &options).unwrap();
+        let none = FusionSetup::with_anchors(&k, &domain, &depth, &options, &[]).unwrap();
+        assert_eq!(none.mesh, plain.mesh);
+        assert_eq!(none.anchor_vertices, 0);
+
+        // One anchor in a cell's quarter (kept), one on a grid corner (skipped), one outside.
+        let anchors = [[9.0, 13.0], [8.0, 12.0], [60.0, 5.0]];
+        let setup = FusionSetup::with_anchors(&k, &domain, &depth, &options, &anchors).unwrap();
+        assert_eq!(setup.anchor_vertices, 1);
+        assert_eq!(setup.vertex_count(), plain.vertex_count() + 1);
+        let i = setup
+            .mesh
+            .points
+            .iter()
+            .position(|p| *p == anchors[0])
+            .unwrap();
+        assert!(setup.mesh.triangles.iter().any(|t| t.contains(&(i as u32))));
+        assert_eq!(setup.ops.mass.nrows(), setup.vertex_count());
+        assert!((setup.mesh.area() - plain.mesh.area()).abs() < 1e-9);
+    }
 }

@@ -2,8 +2,9 @@
 //! mesh I/O shared by every stage.
 //!
 //! Pipeline: a [`Mask`] of pixels with depth → [`sample_domain`] (grid samples, boundary
-//! constraint edges, curvature refinement) → [`PlanarMesh::triangulate`] (constrained
-//! Delaunay on the image plane) → optionally [`flip_depth_aware`] (ERRATA 9).
+//! constraint edges, curvature refinement; [`Samples::add_anchors`] for extra points) →
+//! [`PlanarMesh::triangulate`] (constrained Delaunay on the image plane) → optionally
+//! [`flip_depth_aware`] (ERRATA 9).
 //!
 //! Invariants: the planar mesh is fixed for a whole sequence; triangles have negative signed
 //! area in pixel coordinates (normals of the back-projected surface face the camera); boundary
@@ -28,7 +29,7 @@ pub use mask::Mask;
 pub use one_ring::OneRing;
 pub use planar_mesh::{orient2d, PlanarMesh};
 pub use sampling::{
-    sample_domain, CellGrid, Samples, SamplingOptions, DEFAULT_REFINE_TOLERANCE_M,
-    MIN_CELL_COVERAGE,
+    sample_domain, CellGrid, Samples, SamplingOptions, ANCHOR_MIN_SEPARATION,
+    DEFAULT_REFINE_TOLERANCE_M, MIN_CELL_COVERAGE,
 };
 pub use trimesh::TriMesh;

@@ -6,6 +6,8 @@
 //! includes the image corners and the boundary of the region), plus — where a reference depth
 //! map shows detail the piecewise-linear mesh would miss — the centres of those cells.
 //! The boundary of the union of cells becomes the constraint edges of the triangulation.
+//! [`Samples::add_anchors`] adds caller-chosen points (keypoints, paper §3's "semantic
+//! anchors") inside the domain.
 
 use visage_camera::{DepthMap, Intrinsics};
 
@@ -16,6 +18,12 @@ pub const MIN_CELL_COVERAGE: f64 = 0.5;
 
 /// Default depth error (metres) above which a cell gets an extra sample at its centre.
 pub const DEFAULT_REFINE_TOLERANCE_M: f64 = 0.001;
+
+/// Closest an anchor may come to another sample or to the domain's boundary, as a fraction of
+/// the grid spacing ([`Samples::add_anchors`]): nearer anchors are skipped, so no triangle gets
+/// an edge shorter than a third of the spacing (the grid's own shortest edge is half of it, to
+/// a refinement centre's diagonal neighbours ≈ 0.71).
+pub const ANCHOR_MIN_SEPARATION: f64 = 1.0 / 3.0;
 
 /// How to place sample points.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -105,6 +113,65 @@ pub struct Samples {
     pub constraint_edges: Vec<[u32; 2]>,
     /// The cell grid (used to tell inside from outside triangles).
     pub grid: CellGrid,
+}
+
+impl Samples {
+    /// Adds `anchors` (pixel positions `(u, v)`, e.g. keypoints) as sample points, in order,
+    /// and returns how many were added. An anchor is kept when
+    /// - it is finite and the pixel nearest to it is set in `mask`,
+    /// - the square of half-side `ANCHOR_MIN_SEPARATION · spacing` around it lies in domain
+    ///   cells (it stays that far from the boundary, so it never lands on a constraint edge), and
+    /// - no sample already present (grid corner, refinement centre or an earlier anchor) is
+    ///   nearer than [`ANCHOR_MIN_SEPARATION`]` · spacing`.
+    ///
+    /// The constraint edges and the grid are unchanged; `spacing` is the grid spacing the
+    /// samples were placed with ([`SamplingOptions::spacing`]).
+    pub fn add_anchors(&mut self, mask: &Mask, anchors: &[[f64; 2]], spacing: u32) -> usize {
+        let min = ANCHOR_MIN_SEPARATION * f64::from(spacing.max(1));
+        // Buckets of side `min`: a sample nearer than `min` lies in the 3 × 3 around an anchor's.
+        let bucket = |p: [f64; 2]| ((p[0] / min).floor() as i64, (p[1] / min).floor() as i64);
+        let mut buckets: std::collections::HashMap<(i64, i64), Vec<u32>> =
+            std::collections::HashMap::new();
+        for (i, &p) in self.points.iter().enumerate() {
+            buckets.entry(bucket(p)).or_default().push(i as u32);
+        }
+        let mut added = 0;
+        for &a in anchors {
+            let in_mask = a[0].is_finite()
+                && a[1].is_finite()
+                && mask.get(a[0].round() as i64, a[1].round() as i64);
+            if !in_mask {
+                continue;
+            }
+            let clear_of_boundary = [[-min, -min], [min, -min], [-min, min], [min, min]]
+                .iter()
+                .all(|d| self.grid.contains(a[0] + d[0], a[1] + d[1]));
+            if !clear_of_boundary {
+                continue;
+            }
+            let (bi, bj) = bucket(a);
+            let crowded = (bj - 1..=bj + 1).any(|j| {
+                (bi - 1..=bi + 1).any(|i| {
+                    buckets.get(&(i, j)).is_some_and(|b| {
+                        b.iter().any(|&k| {
+                            let p = self.points[k as usize];
+                            (p[0] - a[0]).hypot(p[1] - a[1]) < min
+                        })
+                    })
+                })
+            });
+            if crowded {
+                continue;
+            }
+            buckets
+                .entry((bi, bj))
+                .or_default()
+                .push(self.points.len() as u32);
+            self.points.push(a);
+            added += 1;
+        }
+        added
+    }
 }
 
 fn grid_lines(size: u32, spacing: u32) -> Vec<f64> {
@@ -315,5 +382,47 @@ mod tests {
         let centres: Vec<_> = s.points[81..].to_vec();
         assert!(!centres.is_empty());
         assert!(centres.iter().all(|p| p[0] > 40.0), "{centres:?}");
+    }
+
+    #[test]
+    fn anchors_inside_the_domain_become_vertices_and_the_rest_are_skipped() {
+        // The left half of a 33 × 33 image is in the domain (cells of 8 px up to u = 16).
+        let mut mask = Mask::filled(33, 33, false);
+        for v in 0..33 {
+            for u in 0..=16 {
+                mask.data[v * 33 + u] = true;
+            }
+        }
+        let opts = SamplingOptions {
+            spacing: 8,
+            ..Default::default()
+        };
+        let plain = sample_domain(&mask, None, &opts).unwrap();
+        let mut s = plain.clone();
+        let anchors = [
+            [5.3, 11.7],  // inside, clear of every corner: kept
+            [12.0, 27.5], // inside: kept
+            [25.0, 12.0], // outside the mask: skipped
+            [8.5, 8.4],   // 0.64 px from the corner (8, 8): too close
+            [6.0, 12.5],  // 1.06 px from the first anchor: too close
+            [15.5, 20.0], // 0.5 px from the boundary u = 16: skipped
+            [f64::NAN, 4.0],
+        ];
+        assert_eq!(s.add_anchors(&mask, &anchors, opts.spacing), 2);
+        assert_eq!(s.points.len(), plain.points.len() + 2);
+        assert_eq!(&s.points[plain.points.len()..], &[anchors[0], anchors[1]]);
+        assert_eq!(s.constraint_edges, plain.constraint_edges);
+
+        let mesh = crate::PlanarMesh::triangulate(&s).unwrap();
+        let anchored: Vec<u32> = (plain.points.len() as u32..s.points.len() as u32).collect();
+        for i in &anchored {
+            assert!(mesh.triangles.iter().any(|t| t.contains(i)), "vertex {i}");
+        }
+        let plain_mesh = crate::PlanarMesh::triangulate(&plain).unwrap();
+        assert!((mesh.area() - plain_mesh.area()).abs() < 1e-9);
+        // No anchors: the samples are untouched.
+        let mut same = plain.clone();
+        assert_eq!(same.add_anchors(&mask, &[], opts.spacing), 0);
+        assert_eq!(same, plain);
     }
 }
