@@ -56,23 +56,37 @@ impl GrayImage {
     }
 
     /// Grey (as [`GrayImage::from_rgb8`]) of the region `[x0, x0 + w) × [y0, y0 + h)` of an 8-bit
-    /// RGB image of `width × height` pixels, clipped to the image; `None` when the buffer's
-    /// length is not `3 · width · height`. Converts only the region: a face in a video frame.
+    /// RGB image of `width × height` pixels, clipped to the image, each `bin × bin` block of it
+    /// averaged into one pixel (`bin` ≥ 1; a partial block at the right or bottom edge is
+    /// dropped). Output pixel `i` covers input pixels `x0 + bin·i … x0 + bin·i + bin − 1`, so its
+    /// centre is at `x0 + bin·i + (bin − 1)/2`. `None` when the buffer's length is not
+    /// `3 · width · height` or `bin` is 0. Converts only the region: a face in a video frame,
+    /// brought to a working size.
     pub fn from_rgb8_region(
         width: usize,
         height: usize,
         rgb: &[u8],
         [x0, y0, w, h]: [usize; 4],
+        bin: usize,
     ) -> Option<Self> {
-        if rgb.len() != 3 * width * height {
+        if rgb.len() != 3 * width * height || bin == 0 {
             return None;
         }
         let (x0, y0) = (x0.min(width), y0.min(height));
-        let (w, h) = (w.min(width - x0), h.min(height - y0));
-        let mut data = Vec::with_capacity(w * h);
-        for y in y0..y0 + h {
-            let row = &rgb[3 * (y * width + x0)..3 * (y * width + x0 + w)];
-            data.extend(row.chunks_exact(3).map(luma));
+        let (w, h) = (w.min(width - x0) / bin, h.min(height - y0) / bin);
+        let mut data = vec![0.0f32; w * h];
+        for (oy, out) in data.chunks_exact_mut(w.max(1)).take(h).enumerate() {
+            for dy in 0..bin {
+                let y = y0 + oy * bin + dy;
+                let row = &rgb[3 * (y * width + x0)..3 * (y * width + x0 + w * bin)];
+                for (o, block) in out.iter_mut().zip(row.chunks_exact(3 * bin)) {
+                    *o += block.chunks_exact(3).map(luma).sum::<f32>();
+                }
+            }
+        }
+        let scale = 1.0 / (bin * bin) as f32;
+        for v in &mut data {
+            *v *= scale;
         }
         Some(GrayImage {
             width: w,
@@ -147,12 +161,18 @@ mod tests {
         let (w, h) = (7, 5);
         let rgb: Vec<u8> = (0..3 * w * h).map(|i| (i * 37 % 256) as u8).collect();
         let whole = GrayImage::from_rgb8(w, h, &rgb).unwrap();
-        let region = GrayImage::from_rgb8_region(w, h, &rgb, [2, 1, 4, 10]).unwrap();
+        let region = GrayImage::from_rgb8_region(w, h, &rgb, [2, 1, 4, 10], 1).unwrap();
         assert_eq!((region.width(), region.height()), (4, 4));
         assert_eq!(region, whole.crop(2, 1, 4, 4));
+        // 2 × 2 bins: the mean of each block's grey levels; the odd row left over is dropped.
+        let binned = GrayImage::from_rgb8_region(w, h, &rgb, [1, 0, 6, 5], 2).unwrap();
+        assert_eq!((binned.width(), binned.height()), (3, 2));
+        let mean = (whole.at(3, 2) + whole.at(4, 2) + whole.at(3, 3) + whole.at(4, 3)) / 4.0;
+        assert_eq!(binned.at(1, 1), mean);
         // OpenCV's levels: pure red 255 → 76, green → 150, blue → 29.
         let prim = GrayImage::from_rgb8(3, 1, &[255, 0, 0, 0, 255, 0, 0, 0, 255]).unwrap();
         assert_eq!(prim.data(), &[76.0, 150.0, 29.0]);
-        assert!(GrayImage::from_rgb8_region(w, h, &rgb[1..], [0, 0, 1, 1]).is_none());
+        assert!(GrayImage::from_rgb8_region(w, h, &rgb[1..], [0, 0, 1, 1], 1).is_none());
+        assert!(GrayImage::from_rgb8_region(w, h, &rgb, [0, 0, 1, 1], 0).is_none());
     }
 }

@@ -26,6 +26,11 @@ use crate::stages::{Tracked, TrackedFace};
 /// The face box is widened by this fraction of its size on each side before detection.
 pub const FACE_MARGIN: f64 = 0.1;
 
+/// Face crops wider than this are averaged down by a whole factor to at most this width
+/// (pixels) before detection: the keypoints' scales are relative, and the cost stays that of
+/// a small face however large the face is in the frame.
+pub const MAX_FACE_CROP_PX: usize = 320;
+
 /// At most this many keypoints per face (the strongest), which bounds the matching's cost.
 pub const MAX_FACE_KEYPOINTS: usize = 400;
 
@@ -128,7 +133,8 @@ impl KeypointMotion {
             centre: centroid(&geometry.fitted_vertices),
         };
         let region = [x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)];
-        let Some(gray) = GrayImage::from_rgb8_region(w, h, image.as_raw(), region) else {
+        let bin = region[2].div_ceil(MAX_FACE_CROP_PX).max(1);
+        let Some(gray) = GrayImage::from_rgb8_region(w, h, image.as_raw(), region, bin) else {
             return out;
         };
         let features = self.sift.detect_and_compute(&gray);
@@ -136,7 +142,11 @@ impl KeypointMotion {
         self.projected
             .extend(geometry.fitted_vertices.iter().map(|&p| self.k.project(p)));
         for (kp, d) in features.keypoints.iter().zip(&features.descriptors) {
-            let pixel = [f64::from(kp.x) + x0 as f64, f64::from(kp.y) + y0 as f64];
+            // A binned pixel's centre is (bin − 1)/2 past its block's first input pixel.
+            let to_frame = |v: f32, origin: usize| {
+                origin as f64 + bin as f64 * f64::from(v) + (bin as f64 - 1.0) / 2.0
+            };
+            let pixel = [to_frame(kp.x, x0), to_frame(kp.y, y0)];
             if let Some(p) = self.lift(pixel, &geometry.fitted_vertices) {
                 out.points.push(p);
                 out.descriptors.push(*d);

@@ -1,10 +1,13 @@
-//! The staged whole-clip run ([`crate::Reconstructor::run`]): four stages on their own
+//! The staged whole-clip run ([`crate::Reconstructor::run`]): five stages on their own
 //! threads, joined by bounded queues ([`QUEUE_CAPACITY`] frames each), and the sink on the
 //! calling thread, frames in input order:
 //!
 //! ```text
-//! decode ──► track + landmarks + rigid fit ──► eyes + model fit ──► depth + fuse ──► sink
+//! decode ──► track + landmarks + rigid fit ──► eyes + model fit ──► keypoint check
+//!        ──► depth + fuse ──► sink
 //! ```
+//!
+//! (The keypoint check passes frames straight on unless it is on.)
 //!
 //! Memory is flat in the clip length in streaming mode: at most `QUEUE_CAPACITY` frames wait
 //! in each queue (and the landmark smoother's latency in the face stage), surface buffers travel back from the sink to the fusion for reuse, and the
@@ -94,7 +97,8 @@ pub(crate) fn run_stages(
     let k = face.k;
     let (decoded_tx, decoded_rx) = sync_channel::<Decoded>(QUEUE_CAPACITY);
     let (tracked_tx, tracked_rx) = sync_channel::<(Tracked, Frame)>(QUEUE_CAPACITY);
-    let (modelled_tx, modelled_rx) = sync_channel::<Tracked>(QUEUE_CAPACITY);
+    let (modelled_tx, modelled_rx) = sync_channel::<(Tracked, Option<Frame>)>(QUEUE_CAPACITY);
+    let (checked_tx, checked_rx) = sync_channel::<Tracked>(QUEUE_CAPACITY);
     let (fused_tx, fused_rx) = sync_channel::<ToSink>(QUEUE_CAPACITY);
     let (recycle_tx, recycle_rx) = sync_channel::<Box<Surfaces>>(2 * QUEUE_CAPACITY + 2);
     let mut consumer = Consumer {
@@ -110,10 +114,14 @@ pub(crate) fn run_stages(
         let decode = scope.spawn(move || decode_stage(input, decoded_tx));
         let face = &mut face;
         let track = scope.spawn(move || track_stage(face, decoded_rx, tracked_tx));
-        let (model, keypoints) = (&mut model, &mut keypoints);
-        let modelling = scope.spawn(move || model_stage(model, keypoints, tracked_rx, modelled_tx));
+        let model = &mut model;
+        let keep_frames = keypoints.is_some();
+        let modelling =
+            scope.spawn(move || model_stage(model, keep_frames, tracked_rx, modelled_tx));
+        let keypoints = &mut keypoints;
+        let checking = scope.spawn(move || keypoint_stage(keypoints, modelled_rx, checked_tx));
         let fusion = scope
-            .spawn(move || fuse_stage(&mut fuse, mode, &clip, modelled_rx, fused_tx, recycle_rx));
+            .spawn(move || fuse_stage(&mut fuse, mode, &clip, checked_rx, fused_tx, recycle_rx));
         let sink_error = consumer.run(fused_rx, recycle_tx).err();
         let join = |h: std::thread::ScopedJoinHandle<'_, Result<(), Error>>, name| {
             h.join().unwrap_or(Err(Error::Panic(name))).err()
@@ -123,6 +131,7 @@ pub(crate) fn run_stages(
                 join(decode, "decode"),
                 join(track, "tracking"),
                 join(modelling, "model"),
+                join(checking, "keypoints"),
                 join(fusion, "fusion"),
             ],
             sink_error,
@@ -167,21 +176,36 @@ fn track_stage(
     Ok(())
 }
 
-/// The model fit and the keypoint check, on one thread.
+/// The model fit; the frame goes on only when the keypoint check needs it.
 fn model_stage(
     model: &mut Option<ModelStage>,
-    keypoints: &mut Option<KeypointMotion>,
+    keep_frames: bool,
     input: Receiver<(Tracked, Frame)>,
-    out: SyncSender<Tracked>,
+    out: SyncSender<(Tracked, Option<Frame>)>,
 ) -> Result<(), Error> {
     for (mut tracked, frame) in input {
         if let Some(model) = model {
             model.fit(&frame.image, &mut tracked)?;
         }
-        if let Some(keypoints) = keypoints {
+        let frame = keep_frames.then_some(frame);
+        if out.send((tracked, frame)).is_err() {
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
+/// The keypoint check, on its own thread (it costs about as much as the model fit); without
+/// it, a pass-through.
+fn keypoint_stage(
+    keypoints: &mut Option<KeypointMotion>,
+    input: Receiver<(Tracked, Option<Frame>)>,
+    out: SyncSender<Tracked>,
+) -> Result<(), Error> {
+    for (mut tracked, frame) in input {
+        if let (Some(keypoints), Some(frame)) = (keypoints.as_mut(), frame) {
             keypoints.observe(&frame.image, &mut tracked);
         }
-        drop(frame);
         if out.send(tracked).is_err() {
             return Ok(());
         }

@@ -46,3 +46,30 @@ fn keypoints_move_with_the_landmark_pose() {
     );
     assert!(outcome.frames[1..].iter().all(|f| f.ms.keypoints > 0.0));
 }
+
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn one_thread_and_the_staged_run_check_alike() {
+    const N: usize = 8;
+    let builder = || {
+        Reconstructor::builder()
+            .models_dir(visage_testdata::models_dir())
+            .keypoint_motion(true)
+            .latency(0)
+    };
+    let input = Input::open(&clip()).unwrap().max_frames(N).unwrap();
+    let mut single = builder().build_for(&input).unwrap();
+    let mut by_process = Vec::new();
+    for frame in input {
+        let r = single.process(&frame.unwrap()).unwrap();
+        by_process.push(r.metrics.keypoint_motion);
+    }
+    let input = Input::open(&clip()).unwrap().max_frames(N).unwrap();
+    let outcome = builder().build_for(&input).unwrap().run(input, &mut ());
+    let by_run: Vec<_> = outcome.frames.iter().map(|f| f.keypoint_motion).collect();
+    assert_eq!(by_process, by_run);
+    assert!(by_run[1..].iter().all(Option::is_some));
+}

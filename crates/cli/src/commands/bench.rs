@@ -56,6 +56,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         "detector_runs": s.detector_runs,
         "stages_ms": s.stages,
         "quality": s.quality,
+        "keypoint_motion": s.keypoint_motion,
     });
     let text = serde_json::to_string_pretty(&doc)?;
     println!("{text}");
