@@ -17,7 +17,10 @@ use crate::metrics::{
 };
 use crate::model_fit::{self, benchmark_face_model, ModelFitSummary};
 use crate::noise::{NoiseGenerator, NoiseModel};
-use crate::sift_anchors::{sift_anchors, SiftAnchorInfo, SiftAnchorOptions};
+use crate::sift_anchors::{
+    random_control_points, sequence_sift_anchors, SiftAnchorInfo, SiftAnchorOptions,
+    RANDOM_CONTROL_SALT,
+};
 use crate::simulated_tracker::{simulate_tracking, TrackedSequence, TrackerNoise};
 use crate::synthesis::{synthesize, SynthesisConfig, SyntheticSequence};
 use crate::vertex_filter::VertexFilter;
@@ -197,6 +200,13 @@ impl BenchmarkConfig {
                 reason: "must be at least 1",
             });
         }
+        if self.sift_anchors.frame_step == Some(0) {
+            return Err(EvalError::InvalidConfig {
+                name: "sift_anchors.frame_step",
+                value: "0".into(),
+                reason: "must be at least 1",
+            });
+        }
         Ok(())
     }
 }
@@ -324,12 +334,16 @@ pub struct PreparedSequence<'a> {
     pub sift: Option<SiftAnchoring>,
 }
 
-/// A sequence's SIFT anchors ([`sift_anchors`] on its first frame) and the image-plane mesh
-/// with them added, which [`Method::StreamingSiftAnchors`] builds the same way.
+/// A sequence's SIFT anchors ([`sequence_sift_anchors`]: its first frame, or every k-th) and
+/// the image-plane mesh with them added, which [`Method::StreamingSiftAnchors`] builds the
+/// same way.
 #[derive(Debug)]
 pub struct SiftAnchoring {
-    /// Keypoint positions, pixels.
+    /// Keypoint positions, pixels (with [`SiftAnchorOptions::random_control`], the random
+    /// points that replace them).
     pub points: Vec<[f64; 2]>,
+    /// Frames searched.
+    pub frames: usize,
     pub setup: FusionSetup,
 }
 
@@ -338,6 +352,7 @@ impl SiftAnchoring {
     pub fn info(&self) -> SiftAnchorInfo {
         SiftAnchorInfo {
             keypoints: self.points.len(),
+            frames: self.frames,
             vertices_added: self.setup.anchor_vertices,
         }
     }
@@ -412,10 +427,17 @@ impl<'a> PreparedSequence<'a> {
         })
     }
 
-    /// Finds the SIFT anchors of the first frame ([`BenchmarkConfig::sift_anchors`]) and
-    /// meshes the domain with them, for [`Method::StreamingSiftAnchors`].
+    /// Finds the SIFT anchors ([`BenchmarkConfig::sift_anchors`]: the first frame, or every
+    /// k-th) and meshes the domain with them, for [`Method::StreamingSiftAnchors`].
     pub fn add_sift_anchors(&mut self, config: &BenchmarkConfig) -> Result<(), EvalError> {
-        let points = sift_anchors(&self.truth, 0, &config.sift_anchors)?;
+        let (mut points, frames) = sequence_sift_anchors(&self.truth, &config.sift_anchors)?;
+        if config.sift_anchors.random_control {
+            points = random_control_points(
+                &points,
+                &self.domain,
+                mix_seed(self.truth.seed ^ RANDOM_CONTROL_SALT),
+            );
+        }
         let setup = FusionSetup::with_anchors(
             &self.truth.k,
             &self.domain,
@@ -423,7 +445,11 @@ impl<'a> PreparedSequence<'a> {
             &config.meshing,
             &points,
         )?;
-        self.sift = Some(SiftAnchoring { points, setup });
+        self.sift = Some(SiftAnchoring {
+            points,
+            frames,
+            setup,
+        });
         Ok(())
     }
 

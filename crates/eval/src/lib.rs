@@ -24,6 +24,7 @@ mod normal;
 mod report;
 mod sift_anchors;
 pub mod simulated_tracker;
+mod skin_texture;
 mod synthesis;
 mod taubin;
 mod trajectory;
@@ -48,13 +49,17 @@ pub use metrics::{
 pub use noise::{NoiseGenerator, NoiseModel, NOISE_PRESETS};
 pub use normal::standard_normal;
 pub use report::{csv, sweep_table, table, write_results, write_sweep};
-pub use sift_anchors::{sift_anchors, SiftAnchorInfo, SiftAnchorOptions};
+pub use sift_anchors::{
+    gray_render, random_control_points, sequence_sift_anchors, sift_anchors, SiftAnchorInfo,
+    SiftAnchorOptions,
+};
 pub use simulated_tracker::{
     simulate_tracking, TrackedSequence, TrackerNoise, BENCHMARK_LATENCY_FRAMES,
 };
+pub use skin_texture::{sequence_skin_albedo, skin_albedo};
 pub use synthesis::{
     synthesize, SynthesisConfig, SyntheticFrame, SyntheticSequence, EXPRESSION_ACTIVITY,
-    PIVOT_DEPTH_M,
+    PIVOT_DEPTH_M, SKIN_ALBEDO,
 };
 pub use taubin::{taubin_smooth, TAUBIN_LAMBDA, TAUBIN_MU};
 pub use trajectory::{keyframe_trajectory, smoothstep, SEGMENT_FRAMES};

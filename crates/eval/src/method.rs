@@ -33,7 +33,8 @@ pub enum Method {
     /// The paper's streaming fusion (ERRATA 4): `(M_D + λK + μM) s^k = b^k + μ M s^{k−1}`.
     Streaming,
     /// [`Method::Streaming`] on the image-plane mesh with the SIFT keypoints of the first
-    /// frame's colour render added as vertices ([`MethodInput::sift_anchors`], paper §3's
+    /// frame's colour render (or every k-th frame's; constant or textured albedo,
+    /// [`crate::SiftAnchorOptions`]) added as vertices ([`MethodInput::sift_anchors`], paper §3's
     /// "semantic anchors"). An experiment: scored only when asked for by name
     /// ([`crate::OPT_IN_METHODS`]).
     StreamingSiftAnchors,

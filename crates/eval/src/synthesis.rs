@@ -177,22 +177,77 @@ impl SyntheticSequence {
     /// A shaded colour image (linear RGB, row-major) of frame `index`, rendered by the project's
     /// renderer (Algorithm 3: Blinn–Phong, default light and a skin-like constant albedo).
     pub fn render_color(&self, index: usize) -> Result<Vec<[f32; 3]>, EvalError> {
+        self.render_color_with(index, None)
+    }
+
+    /// [`SyntheticSequence::render_color`] with, when given, one linear RGB albedo per vertex
+    /// of the rendered surface (`vertex_colors`, interpolated across triangles) instead of the
+    /// constant one.
+    ///
+    /// # Errors
+    /// A failing render, or `vertex_colors` of another length than the frame's vertices.
+    pub fn render_color_with(
+        &self,
+        index: usize,
+        vertex_colors: Option<&[[f32; 3]]>,
+    ) -> Result<Vec<[f32; 3]>, EvalError> {
         let camera = Camera::new(self.k)?;
+        let mut mesh = self.mesh(index);
+        let albedo = match vertex_colors {
+            Some(colors) => {
+                if colors.len() != mesh.vertices.len() {
+                    return Err(EvalError::InvalidConfig {
+                        name: "vertex_colors",
+                        value: colors.len().to_string(),
+                        reason: "need one colour per vertex of the rendered surface",
+                    });
+                }
+                mesh.colors = colors.to_vec();
+                visage_render::Albedo::VertexColors
+            }
+            None => visage_render::Albedo::Constant(SKIN_ALBEDO),
+        };
         let scene = Scene {
-            albedo: visage_render::Albedo::Constant([0.8, 0.6, 0.5]),
+            albedo,
             ..Scene::default()
         };
         let mut frame = Frame::color_and_depth(self.k.width, self.k.height, DepthKind::Z);
-        Renderer::new().render(
-            &self.mesh(index),
-            &camera,
-            &Mat4::IDENTITY,
-            &scene,
-            &mut frame,
-        )?;
+        Renderer::new().render(&mesh, &camera, &Mat4::IDENTITY, &scene, &mut frame)?;
         Ok(frame.color)
     }
+
+    /// The vertices of frame `index` in head coordinates (metres): the camera-space mesh with
+    /// the frame's head pose undone, `R_c · (x_model − pivot)` in the module's notation — fixed
+    /// to the face, so a function of them is a texture that moves with the skin (up to the
+    /// frame's expression).
+    ///
+    /// # Panics
+    /// If `index` is not a frame.
+    #[track_caller]
+    pub fn head_coordinates(&self, index: usize) -> Vec<[f64; 3]> {
+        let f = &self.frames[index];
+        let r = mul(rotation_y(f.yaw_deg), rotation_x(f.pitch_deg));
+        let t = [
+            f.translation[0],
+            f.translation[1],
+            self.distance_m + PIVOT_DEPTH_M + f.translation[2],
+        ];
+        // x_cam = R_c · R_head · d + t, R_c R_head = R_h' R_c with R_h' = R_c R_head R_c; so
+        // R_c · d = R_h'ᵀ · (x_cam − t).
+        let r_c = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
+        let r_h = mul(r_c, mul(r, r_c));
+        f.vertices
+            .iter()
+            .map(|p| {
+                let d = [p[0] - t[0], p[1] - t[1], p[2] - t[2]];
+                std::array::from_fn(|i| r_h[0][i] * d[0] + r_h[1][i] * d[1] + r_h[2][i] * d[2])
+            })
+            .collect()
+    }
 }
+
+/// The linear RGB albedo of [`SyntheticSequence::render_color`]: a light skin tone.
+pub const SKIN_ALBEDO: [f32; 3] = [0.8, 0.6, 0.5];
 
 fn rotation_y(deg: f64) -> [[f64; 3]; 3] {
     let (s, c) = deg.to_radians().sin_cos();

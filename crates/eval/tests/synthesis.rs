@@ -3,7 +3,10 @@
 
 use std::path::PathBuf;
 
-use visage_eval::{synthesize, BenchmarkConfig, SynthesisConfig};
+use visage_eval::{
+    sequence_sift_anchors, sift_anchors, synthesize, BenchmarkConfig, SiftAnchorOptions,
+    SynthesisConfig,
+};
 use visage_mesh::point_to_mesh::TriangleGrid;
 use visage_morphable::IctModel;
 
@@ -63,4 +66,52 @@ fn sequences_are_seeded_in_range_and_consistent_with_their_render() {
         }
     }
     assert!(n > 300 && worst < 1e-5, "{n} pixels, worst {worst} m");
+}
+
+#[test]
+#[cfg_attr(not(shared_data), ignore = "needs ../shared beside the checkout")]
+fn head_coordinates_undo_the_pose_and_the_skin_texture_gives_sift_detail() {
+    let dir = shared_model();
+    let model = IctModel::load_with(&dir, &BenchmarkConfig::quick().import).unwrap();
+    let config = SynthesisConfig {
+        frames: 30,
+        ..BenchmarkConfig::quick().synthesis
+    };
+    let seq = synthesize(&model, &config, 5).unwrap();
+    let (first, last) = (&seq.frames[0], &seq.frames[29]);
+    assert!((first.yaw_deg - last.yaw_deg).abs() > 1.0);
+    // Vertices off the face do not move with the expression: in head coordinates they stay.
+    let (h0, h1) = (seq.head_coordinates(0), seq.head_coordinates(29));
+    let still = h0
+        .iter()
+        .zip(&h1)
+        .filter(|(a, b)| (0..3).all(|i| (a[i] - b[i]).abs() < 1e-9))
+        .count();
+    assert!(still > h0.len() / 4, "{still} of {}", h0.len());
+
+    let untextured = SiftAnchorOptions::default();
+    let textured = SiftAnchorOptions {
+        textured: true,
+        ..untextured
+    };
+    let plain = sift_anchors(&seq, 0, &untextured).unwrap();
+    let detailed = sift_anchors(&seq, 0, &textured).unwrap();
+    assert!(
+        detailed.len() > 2 * plain.len(),
+        "{} keypoints textured, {} plain",
+        detailed.len(),
+        plain.len()
+    );
+    assert_eq!(detailed, sift_anchors(&seq, 0, &textured).unwrap());
+    let (union, frames) = sequence_sift_anchors(
+        &seq,
+        &SiftAnchorOptions {
+            frame_step: Some(10),
+            ..textured
+        },
+    )
+    .unwrap();
+    assert_eq!(frames, 3);
+    assert_eq!(union[..detailed.len()], detailed[..]);
+    assert!(union.len() > detailed.len());
 }

@@ -117,9 +117,23 @@ pub struct SyntheticArgs {
     /// keypoints).
     #[arg(long)]
     pub sift_no_upsample: bool,
-    /// streaming_sift_anchors: keep at most this many keypoints, the strongest.
+    /// streaming_sift_anchors: keep at most this many keypoints, the strongest (per frame
+    /// searched).
     #[arg(long)]
     pub sift_max_keypoints: Option<usize>,
+    /// streaming_sift_anchors: find the keypoints on renders with a seeded procedural skin
+    /// texture (blotches, pores, freckles) instead of the constant albedo; the depth inputs
+    /// are unchanged.
+    #[arg(long)]
+    pub sift_textured: bool,
+    /// streaming_sift_anchors: search frames 0, K, 2K, … and add the union of their keypoints
+    /// (default: frame 0 only).
+    #[arg(long, value_name = "K")]
+    pub sift_frame_step: Option<usize>,
+    /// streaming_sift_anchors, a control: replace the keypoints inside the meshing domain by
+    /// as many seeded random points of it.
+    #[arg(long)]
+    pub sift_random_control: bool,
 }
 
 /// Runs `visage eval`.
@@ -172,6 +186,9 @@ fn config(args: &SyntheticArgs) -> anyhow::Result<BenchmarkConfig> {
     }
     c.sift_anchors.upsample = !args.sift_no_upsample;
     c.sift_anchors.max_keypoints = args.sift_max_keypoints;
+    c.sift_anchors.textured = args.sift_textured;
+    c.sift_anchors.frame_step = args.sift_frame_step;
+    c.sift_anchors.random_control = args.sift_random_control;
     if args.sweep_lambda.is_empty() != args.sweep_mu.is_empty() {
         bail!("--sweep-lambda and --sweep-mu go together");
     }
@@ -287,6 +304,9 @@ mod tests {
             spacing: 4,
             sift_no_upsample: false,
             sift_max_keypoints: None,
+            sift_textured: false,
+            sift_frame_step: None,
+            sift_random_control: false,
         }
     }
 
@@ -361,6 +381,9 @@ mod tests {
         let chosen = config(&SyntheticArgs {
             methods: vec!["streaming".into(), "streaming_sift_anchors".into()],
             sift_max_keypoints: Some(200),
+            sift_textured: true,
+            sift_frame_step: Some(10),
+            sift_random_control: true,
             ..args()
         })
         .unwrap();
@@ -374,6 +397,17 @@ mod tests {
             )
         );
         assert_eq!(chosen.sift_anchors.max_keypoints, Some(200));
+        assert!(chosen.sift_anchors.textured);
+        assert_eq!(chosen.sift_anchors.frame_step, Some(10));
+        assert!(chosen.sift_anchors.random_control);
+        assert!(!c.sift_anchors.random_control);
+        assert!(!c.sift_anchors.textured);
+        assert_eq!(c.sift_anchors.frame_step, None);
+        assert!(config(&SyntheticArgs {
+            sift_frame_step: Some(0),
+            ..args()
+        })
+        .is_err());
         let unknown = SyntheticArgs {
             methods: vec!["streeming".into()],
             ..args()
