@@ -73,6 +73,17 @@ impl Sift {
     /// Keypoints and descriptors of `image` (intensities 0–255), sorted by position as
     /// OpenCV sorts them (x, then y, size, angle), exact duplicates removed.
     pub fn detect_and_compute(&mut self, image: &GrayImage) -> Features {
+        self.detect_and_compute_where(image, |_| true)
+    }
+
+    /// [`Sift::detect_and_compute`] for the keypoints `keep` accepts, asked before the
+    /// descriptors are computed (and before [`SiftOptions::max_keypoints`] applies): a region of
+    /// interest that is not a rectangle costs no descriptors outside it.
+    pub fn detect_and_compute_where(
+        &mut self,
+        image: &GrayImage,
+        mut keep: impl FnMut(&Keypoint) -> bool,
+    ) -> Features {
         let o = self.options;
         if image.width() == 0 || image.height() == 0 {
             return Features::default();
@@ -126,6 +137,7 @@ impl Sift {
             let (p, q) = (&a.keypoint, &b.keypoint);
             (p.x, p.y, p.size, p.angle) == (q.x, q.y, q.size, q.angle)
         });
+        located.retain(|l| keep(&l.keypoint));
         if let Some(limit) = o.max_keypoints {
             if located.len() > limit {
                 located.sort_by(|a, b| b.keypoint.response.total_cmp(&a.keypoint.response));

@@ -222,3 +222,22 @@ fn empty_and_tiny_images_give_no_keypoints() {
         .detect_and_compute(&GrayImage::from_vec(1, 1, vec![7.0]).unwrap())
         .is_empty());
 }
+
+#[test]
+fn a_filter_keeps_exactly_the_accepted_keypoints_with_their_descriptors() {
+    let image = texture(160, 140);
+    let mut sift = Sift::new(SiftOptions::default());
+    let all = sift.detect_and_compute(&image);
+    let left = sift.detect_and_compute_where(&image, |k| k.x < 80.0);
+    let expected: Vec<(Keypoint, Descriptor)> = all
+        .keypoints
+        .iter()
+        .copied()
+        .zip(all.descriptors.iter().copied())
+        .filter(|(k, _)| k.x < 80.0)
+        .collect();
+    let got: Vec<(Keypoint, Descriptor)> =
+        left.keypoints.into_iter().zip(left.descriptors).collect();
+    assert!(!got.is_empty() && got.len() < all.len());
+    assert_eq!(got, expected);
+}

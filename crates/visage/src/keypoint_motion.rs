@@ -29,7 +29,7 @@ pub const FACE_MARGIN: f64 = 0.1;
 /// Face crops wider than this are averaged down by a whole factor to at most this width
 /// (pixels) before detection: the keypoints' scales are relative, and the cost stays that of
 /// a small face however large the face is in the frame.
-pub const MAX_FACE_CROP_PX: usize = 320;
+pub const MAX_FACE_CROP_PX: usize = 200;
 
 /// At most this many keypoints per face (the strongest), which bounds the matching's cost.
 pub const MAX_FACE_KEYPOINTS: usize = 400;
@@ -78,7 +78,90 @@ pub(crate) struct KeypointMotion {
     canonical: Arc<CanonicalMesh>,
     sift: Sift,
     previous: Option<FaceKeypoints>,
+    /// The fitted face's vertices projected into the frame, and its triangles bucketed by
+    /// the cells their bounding boxes overlap.
     projected: Vec<[f64; 2]>,
+    grid: TriangleGrid,
+}
+
+/// Pixels per side of a [`TriangleGrid`] cell.
+const GRID_CELL_PX: f64 = 16.0;
+
+/// The projected face's triangles by grid cell, rebuilt each frame, so a keypoint is tested
+/// against the few triangles near it instead of all 898.
+#[derive(Default)]
+struct TriangleGrid {
+    origin: [f64; 2],
+    columns: usize,
+    rows: usize,
+    /// Per cell `c`: triangles `entries[starts[c]..starts[c + 1]]`.
+    starts: Vec<usize>,
+    entries: Vec<u32>,
+}
+
+impl TriangleGrid {
+    fn build(&mut self, points: &[[f64; 2]], triangles: &[[u32; 3]]) {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in points {
+            for a in 0..2 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        self.entries.clear();
+        self.starts.clear();
+        if !(lo[0].is_finite() && lo[1].is_finite() && hi[0].is_finite() && hi[1].is_finite()) {
+            (self.columns, self.rows) = (0, 0);
+            return;
+        }
+        self.origin = lo;
+        self.columns = ((hi[0] - lo[0]) / GRID_CELL_PX) as usize + 1;
+        self.rows = ((hi[1] - lo[1]) / GRID_CELL_PX) as usize + 1;
+        let cells = |t: &[u32; 3]| {
+            let [a, b, c] = t.map(|i| points[i as usize]);
+            let cell = |v: f64, o: f64| ((v - o) / GRID_CELL_PX) as usize;
+            let (c0, c1) = (
+                cell(a[0].min(b[0]).min(c[0]), lo[0]),
+                cell(a[0].max(b[0]).max(c[0]), lo[0]),
+            );
+            let (r0, r1) = (
+                cell(a[1].min(b[1]).min(c[1]), lo[1]),
+                cell(a[1].max(b[1]).max(c[1]), lo[1]),
+            );
+            (r0..=r1).flat_map(move |r| (c0..=c1).map(move |c| (r, c)))
+        };
+        // Counting pass, then filling (a compressed row layout).
+        let n = self.columns * self.rows;
+        self.starts.resize(n + 1, 0);
+        for t in triangles {
+            for (r, c) in cells(t) {
+                self.starts[r * self.columns + c + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            self.starts[i + 1] += self.starts[i];
+        }
+        self.entries.resize(self.starts[n], 0);
+        let mut fill = self.starts.clone();
+        for (k, t) in triangles.iter().enumerate() {
+            for (r, c) in cells(t) {
+                let cell = r * self.columns + c;
+                self.entries[fill[cell]] = k as u32;
+                fill[cell] += 1;
+            }
+        }
+    }
+
+    /// Triangles whose bounding boxes may hold `p`.
+    fn near(&self, p: [f64; 2]) -> &[u32] {
+        let c = (p[0] - self.origin[0]) / GRID_CELL_PX;
+        let r = (p[1] - self.origin[1]) / GRID_CELL_PX;
+        if !(c >= 0.0 && r >= 0.0 && (c as usize) < self.columns && (r as usize) < self.rows) {
+            return &[];
+        }
+        let cell = r as usize * self.columns + c as usize;
+        &self.entries[self.starts[cell]..self.starts[cell + 1]]
+    }
 }
 
 impl KeypointMotion {
@@ -95,6 +178,7 @@ impl KeypointMotion {
             }),
             previous: None,
             projected: Vec::new(),
+            grid: TriangleGrid::default(),
         }
     }
 
@@ -137,35 +221,59 @@ impl KeypointMotion {
         let Some(gray) = GrayImage::from_rgb8_region(w, h, image.as_raw(), region, bin) else {
             return out;
         };
-        let features = self.sift.detect_and_compute(&gray);
         self.projected.clear();
         self.projected
             .extend(geometry.fitted_vertices.iter().map(|&p| self.k.project(p)));
-        for (kp, d) in features.keypoints.iter().zip(&features.descriptors) {
-            // A binned pixel's centre is (bin − 1)/2 past its block's first input pixel.
-            let to_frame = |v: f32, origin: usize| {
+        self.grid.build(&self.projected, &self.canonical.triangles);
+        // A binned pixel's centre is (bin − 1)/2 past its block's first input pixel.
+        let to_frame = |kp: &visage_keypoints::Keypoint| {
+            let at = |v: f32, origin: usize| {
                 origin as f64 + bin as f64 * f64::from(v) + (bin as f64 - 1.0) / 2.0
             };
-            let pixel = [to_frame(kp.x, x0), to_frame(kp.y, y0)];
-            if let Some(p) = self.lift(pixel, &geometry.fitted_vertices) {
+            [at(kp.x, x0), at(kp.y, y0)]
+        };
+        let surface = FaceSurface {
+            triangles: &self.canonical.triangles,
+            projected: &self.projected,
+            grid: &self.grid,
+            vertices: &geometry.fitted_vertices,
+        };
+        // Only keypoints on the fitted face are described.
+        let features = self
+            .sift
+            .detect_and_compute_where(&gray, |kp| surface.lift(to_frame(kp)).is_some());
+        for (kp, d) in features.keypoints.iter().zip(&features.descriptors) {
+            if let Some(p) = surface.lift(to_frame(kp)) {
                 out.points.push(p);
                 out.descriptors.push(*d);
             }
         }
         out
     }
+}
 
+/// The fitted face in a frame: its triangles, vertices (camera coordinates) and their
+/// projections, bucketed.
+struct FaceSurface<'a> {
+    triangles: &'a [[u32; 3]],
+    projected: &'a [[f64; 2]],
+    grid: &'a TriangleGrid,
+    vertices: &'a [[f64; 3]],
+}
+
+impl FaceSurface<'_> {
     /// The nearest point of the fitted face seen at `pixel`: in each projected triangle that
     /// holds the pixel, the perspective-correct interpolation of its corners (where the pixel's
     /// ray meets the triangle's plane); the smallest depth wins. `None` off the face.
-    fn lift(&self, pixel: [f64; 2], vertices: &[[f64; 3]]) -> Option<[f64; 3]> {
+    fn lift(&self, pixel: [f64; 2]) -> Option<[f64; 3]> {
         let mut best: Option<[f64; 3]> = None;
-        for t in &self.canonical.triangles {
+        for &t in self.grid.near(pixel) {
+            let t = self.triangles[t as usize];
             let [a, b, c] = t.map(|i| self.projected[i as usize]);
             let Some(bary) = barycentric(a, b, c, pixel) else {
                 continue;
             };
-            let corners = t.map(|i| vertices[i as usize]);
+            let corners = t.map(|i| self.vertices[i as usize]);
             let w: [f64; 3] = std::array::from_fn(|j| bary[j] / corners[j][2]);
             let sum = w[0] + w[1] + w[2];
             let point: [f64; 3] =
@@ -257,6 +365,35 @@ fn rotation_angle_deg(m: &[[f64; 3]; 3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_surface_is_lifted_where_the_ray_meets_the_nearest_triangle() {
+        let k = Intrinsics::new(200, 200, 100.0, 100.0, 100.0, 100.0).unwrap();
+        // A tilted square (z = 0.5 + 0.2 x) and, behind part of it, a farther one.
+        let vertices: Vec<[f64; 3]> = [[-0.2, -0.2], [0.2, -0.2], [0.2, 0.2], [-0.2, 0.2]]
+            .iter()
+            .map(|&[x, y]| [x, y, 0.5 + 0.2 * x])
+            .chain([[-0.1, -0.1, 0.9], [0.3, -0.1, 0.9], [-0.1, 0.3, 0.9]])
+            .collect();
+        let triangles = vec![[0, 1, 2], [0, 2, 3], [4, 5, 6]];
+        let projected: Vec<[f64; 2]> = vertices.iter().map(|&p| k.project(p)).collect();
+        let mut grid = TriangleGrid::default();
+        grid.build(&projected, &triangles);
+        let surface = FaceSurface {
+            triangles: &triangles,
+            projected: &projected,
+            grid: &grid,
+            vertices: &vertices,
+        };
+        for pixel in [[100.0, 100.0], [120.0, 90.0], [85.0, 112.0]] {
+            let p = surface.lift(pixel).unwrap();
+            // On the near plane and on the pixel's ray.
+            assert!((p[2] - (0.5 + 0.2 * p[0])).abs() < 1e-12, "{p:?}");
+            let back = k.project(p);
+            assert!((back[0] - pixel[0]).abs() < 1e-9 && (back[1] - pixel[1]).abs() < 1e-9);
+        }
+        assert!(surface.lift([5.0, 5.0]).is_none());
+    }
 
     #[test]
     fn barycentric_inside_and_outside() {
