@@ -17,6 +17,7 @@ use crate::metrics::{
 };
 use crate::model_fit::{self, benchmark_face_model, ModelFitSummary};
 use crate::noise::{NoiseGenerator, NoiseModel};
+use crate::seed::mix_seed;
 use crate::sift_anchors::{
     random_control_points, sequence_sift_anchors, SiftAnchorInfo, SiftAnchorOptions,
     RANDOM_CONTROL_SALT,
@@ -42,14 +43,6 @@ pub const ANCHORED_WEIGHTS: Weights = visage_fusion::ANCHORED_WEIGHTS_MAP;
 pub const ANCHORED_SUBDIVISION: usize = 2;
 /// Fewest domain pixels a sequence must leave to be meshed.
 const MIN_DOMAIN_PIXELS: usize = 64;
-
-/// SplitMix64 (Steele et al. 2014): decorrelated seeds from consecutive integers.
-pub fn mix_seed(x: u64) -> u64 {
-    let mut z = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d1_049b_1331_11eb);
-    z ^ (z >> 31)
-}
 
 /// Everything that decides a benchmark's numbers (the `config` of `results.json`).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]

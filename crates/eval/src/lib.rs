@@ -22,6 +22,7 @@ pub mod model_fit;
 mod noise;
 mod normal;
 mod report;
+mod seed;
 mod sift_anchors;
 pub mod simulated_tracker;
 mod skin_texture;
@@ -32,9 +33,9 @@ mod vertex_filter;
 mod video_report;
 
 pub use benchmark::{
-    methods, mix_seed, run_benchmark, run_sweep, selected_methods, sequence_seed, tune_taubin,
-    AnchoringInfo, BenchmarkConfig, BenchmarkResults, FaceAnchoring, PreparedSequence,
-    SequenceInfo, SiftAnchoring, SweepPoint, TaubinTuning, ANCHORED_SUBDIVISION, ANCHORED_WEIGHTS,
+    methods, run_benchmark, run_sweep, selected_methods, sequence_seed, tune_taubin, AnchoringInfo,
+    BenchmarkConfig, BenchmarkResults, FaceAnchoring, PreparedSequence, SequenceInfo,
+    SiftAnchoring, SweepPoint, TaubinTuning, ANCHORED_SUBDIVISION, ANCHORED_WEIGHTS,
     BENCHMARK_LANDMARK_SMOOTHING, OPT_IN_METHODS, QUICK_EXPRESSIONS, TUNING_SALT,
 };
 pub use error::EvalError;
@@ -49,6 +50,7 @@ pub use metrics::{
 pub use noise::{NoiseGenerator, NoiseModel, NOISE_PRESETS};
 pub use normal::standard_normal;
 pub use report::{csv, sweep_table, table, write_results, write_sweep};
+pub use seed::mix_seed;
 pub use sift_anchors::{
     gray_render, random_control_points, sequence_sift_anchors, sift_anchors, SiftAnchorInfo,
     SiftAnchorOptions,

@@ -14,8 +14,9 @@ use visage_keypoints::{GrayImage, Sift, SiftOptions};
 use visage_mesh::color::linear_to_srgb_u8;
 use visage_mesh::Mask;
 
+use crate::seed::mix_seed;
 use crate::skin_texture::sequence_skin_albedo;
-use crate::{mix_seed, EvalError, SyntheticSequence};
+use crate::{EvalError, SyntheticSequence};
 
 /// Salt of the skin texture's seed (`mix_seed(sequence seed ^ TEXTURE_SALT)`).
 const TEXTURE_SALT: u64 = 0x5c1_7e47_5eed;

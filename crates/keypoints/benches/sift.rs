@@ -44,18 +44,25 @@ fn bench(c: &mut Criterion) {
     group.bench_function("frame_720x1280", |b| {
         b.iter(|| std::hint::black_box(sift.detect_and_compute(&image)))
     });
-    // A face in a 720 × 1280 portrait clip spans ~300 px: the crop around it, no upsampling.
+    // A face in a 720 × 1280 portrait clip spans ~300 px: the crop around it, with and
+    // without the doubled octave, and at the pipeline's working size (`visage run
+    // --keypoints` averages face crops down to at most 200 px wide, no doubling).
     let crop = image.crop(210, 330, 300, 360);
+    let small = image.crop(260, 390, 200, 240);
     let mut face = Sift::new(SiftOptions {
         upsample: false,
         ..SiftOptions::default()
     });
     println!(
-        "face crop 300×360: {} keypoints",
-        face.detect_and_compute(&crop).len()
+        "face crop 300×360: {} keypoints; 200×240: {}",
+        face.detect_and_compute(&crop).len(),
+        face.detect_and_compute(&small).len()
     );
     group.bench_function("face_crop_300x360_no_upsample", |b| {
         b.iter(|| std::hint::black_box(face.detect_and_compute(&crop)))
+    });
+    group.bench_function("face_crop_200x240_no_upsample", |b| {
+        b.iter(|| std::hint::black_box(face.detect_and_compute(&small)))
     });
     let mut face_up = Sift::new(SiftOptions::default());
     group.bench_function("face_crop_300x360", |b| {

@@ -12,7 +12,6 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use image::RgbImage;
-use serde::Serialize;
 use visage_camera::{Intrinsics, RigidTransform};
 use visage_face::CanonicalMesh;
 use visage_keypoints::{
@@ -21,6 +20,7 @@ use visage_keypoints::{
 };
 use visage_morphable::fit::rigid_pose::mat3_mul;
 
+use crate::metrics::KeypointMotionMetrics;
 use crate::stages::{Tracked, TrackedFace};
 
 /// The face box is widened by this fraction of its size on each side before detection.
@@ -40,26 +40,6 @@ pub const INLIER_THRESHOLD_M: f64 = 0.003;
 
 /// Fewer inliers than this give no motion estimate.
 pub const MIN_INLIERS: usize = 8;
-
-/// One frame's keypoint check of the head's motion since the previous frame (`metrics.json`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct KeypointMotionMetrics {
-    /// SIFT keypoints on the fitted face surface in this frame.
-    pub keypoints: usize,
-    /// Of those, matched with the previous frame's (ratio test, mutual).
-    pub matches: usize,
-    /// Matches the RANSAC motion explains within [`INLIER_THRESHOLD_M`] (0: no estimate).
-    pub inliers: usize,
-    /// The keypoints' rotation since the previous frame, degrees (`None`: no estimate).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub rotation_deg: Option<f64>,
-    /// Angle between the keypoints' rotation and the landmark pose's, degrees.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub rotation_disagreement_deg: Option<f64>,
-    /// Distance between where the two motions take the face's centre, millimetres.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub translation_disagreement_mm: Option<f64>,
-}
 
 /// A frame's face keypoints on its fitted surface.
 struct FaceKeypoints {

@@ -83,8 +83,7 @@ pub use error::Error;
 pub use gaze::{eye_gaze, eye_look_weights, EyeGaze};
 pub use input::{Input, KeptFrames};
 pub use keypoint_motion::{
-    KeypointMotionMetrics, FACE_MARGIN, INLIER_THRESHOLD_M, MAX_FACE_CROP_PX, MAX_FACE_KEYPOINTS,
-    MIN_INLIERS,
+    FACE_MARGIN, INLIER_THRESHOLD_M, MAX_FACE_CROP_PX, MAX_FACE_KEYPOINTS, MIN_INLIERS,
 };
 pub use landmark_smoothing::{
     CLIP_LATENCY_FRAMES, DEFAULT_DISTANCE_SMOOTHING, DEFAULT_FRAME_INTERVAL_S,

@@ -7,7 +7,6 @@ use serde::Serialize;
 use visage_camera::{Intrinsics, RigidTransform};
 use visage_fem::{ClipReport, SurfaceQuality};
 
-use crate::keypoint_motion::KeypointMotionMetrics;
 use crate::quality::QualitySummary;
 
 /// Outcome of one frame.
@@ -240,6 +239,27 @@ impl Percentiles {
             mean_ms: values.iter().sum::<f64>() / values.len() as f64,
         }
     }
+}
+
+/// One frame's keypoint check of the head's motion since the previous frame (`metrics.json`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct KeypointMotionMetrics {
+    /// SIFT keypoints on the fitted face surface in this frame.
+    pub keypoints: usize,
+    /// Of those, matched with the previous frame's (ratio test, mutual).
+    pub matches: usize,
+    /// Matches the RANSAC motion explains within [`crate::INLIER_THRESHOLD_M`] (0: no
+    /// estimate).
+    pub inliers: usize,
+    /// The keypoints' rotation since the previous frame, degrees (`None`: no estimate).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rotation_deg: Option<f64>,
+    /// Angle between the keypoints' rotation and the landmark pose's, degrees.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rotation_disagreement_deg: Option<f64>,
+    /// Distance between where the two motions take the face's centre, millimetres.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub translation_disagreement_mm: Option<f64>,
 }
 
 /// Totals of a run.

@@ -33,10 +33,7 @@ fn keypoints_move_with_the_landmark_pose() {
     // Every frame but the first is compared with its predecessor.
     assert_eq!(s.frames, FRAMES - 1);
     assert!(s.estimated as f64 >= 0.9 * s.frames as f64, "{s:?}");
-    assert!(
-        s.median_matches >= 10.0 && s.median_inliers >= 8.0,
-        "{s:?}"
-    );
+    assert!(s.median_matches >= 10.0 && s.median_inliers >= 8.0, "{s:?}");
     assert!(s.median_rotation_disagreement_deg < 1.0, "{s:?}");
     assert!(s.median_translation_disagreement_mm < 3.0, "{s:?}");
     let first = &outcome.frames[0];
