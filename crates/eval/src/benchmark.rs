@@ -19,9 +19,10 @@ use crate::model_fit::{self, benchmark_face_model, ModelFitSummary};
 use crate::noise::{NoiseGenerator, NoiseModel};
 use crate::seed::mix_seed;
 use crate::sift_anchors::{
-    random_control_points, sequence_sift_anchors, SiftAnchorInfo, SiftAnchorOptions,
-    RANDOM_CONTROL_SALT,
+    frame_sift_keypoints, random_control_points, sequence_sift_anchors, SiftAnchorInfo,
+    SiftAnchorOptions, RANDOM_CONTROL_SALT,
 };
+use crate::sift_fairing::{FairingKeypoints, SiftFairingOptions, FAIRING_CONTROL_SALT};
 use crate::simulated_tracker::{simulate_tracking, TrackedSequence, TrackerNoise};
 use crate::synthesis::{synthesize, SynthesisConfig, SyntheticSequence};
 use crate::vertex_filter::VertexFilter;
@@ -78,8 +79,12 @@ pub struct BenchmarkConfig {
     /// The only way to score an [`OPT_IN_METHODS`] one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub methods: Option<Vec<String>>,
-    /// SIFT settings of [`Method::StreamingSiftAnchors`].
+    /// SIFT settings of [`Method::StreamingSiftAnchors`] and
+    /// [`Method::FaceAnchoredFairedSift`] (its keypoints: every frame's, with the same
+    /// upsampling, cap, texture and random control).
     pub sift_anchors: SiftAnchorOptions,
+    /// Fairing weights of [`Method::FaceAnchoredFairedSift`].
+    pub sift_fairing: SiftFairingOptions,
     /// The modes imported from the model (recorded for reproducibility).
     #[serde(skip)]
     pub import: ImportOptions,
@@ -117,6 +122,7 @@ impl BenchmarkConfig {
             taubin_candidates: vec![0, 1, 2, 3, 5, 8, 12, 20, 30, 50],
             methods: None,
             sift_anchors: SiftAnchorOptions::default(),
+            sift_fairing: SiftFairingOptions::default(),
             import: ImportOptions::default(),
             identity_modes: 0,
             expression_modes: Vec::new(),
@@ -193,6 +199,7 @@ impl BenchmarkConfig {
                 reason: "must be at least 1",
             });
         }
+        self.sift_fairing.validate()?;
         if self.sift_anchors.frame_step == Some(0) {
             return Err(EvalError::InvalidConfig {
                 name: "sift_anchors.frame_step",
@@ -294,6 +301,19 @@ pub struct SequenceInfo {
     /// The SIFT anchors, when [`Method::StreamingSiftAnchors`] ran.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sift_anchors: Option<SiftAnchorInfo>,
+    /// The keypoint-weighted fairing, when [`Method::FaceAnchoredFairedSift`] ran.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sift_fairing: Option<SiftFairingInfo>,
+}
+
+/// The keypoints of [`Method::FaceAnchoredFairedSift`] on a sequence, for the record.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct SiftFairingInfo {
+    /// Keypoints per frame, mean over the frames.
+    pub keypoints_per_frame: f64,
+    /// Fraction of the vertices at full weight, mean over the frames (the random control: the
+    /// same).
+    pub full_weight_fraction: f64,
 }
 
 /// Everything `results.json` holds.
@@ -325,6 +345,9 @@ pub struct PreparedSequence<'a> {
     /// The SIFT anchors and the mesh they make ([`PreparedSequence::add_sift_anchors`];
     /// `None`: [`Method::StreamingSiftAnchors`] cannot run).
     pub sift: Option<SiftAnchoring>,
+    /// Every frame's SIFT keypoints ([`PreparedSequence::add_fairing_keypoints`]; `None`:
+    /// [`Method::FaceAnchoredFairedSift`] cannot run).
+    pub fairing_keypoints: Option<Vec<Vec<[f64; 2]>>>,
 }
 
 /// A sequence's SIFT anchors ([`sequence_sift_anchors`]: its first frame, or every k-th) and
@@ -417,6 +440,7 @@ impl<'a> PreparedSequence<'a> {
             anchoring,
             tracking,
             sift: None,
+            fairing_keypoints: None,
         })
     }
 
@@ -443,6 +467,13 @@ impl<'a> PreparedSequence<'a> {
             frames,
             setup,
         });
+        Ok(())
+    }
+
+    /// Finds every frame's SIFT keypoints ([`frame_sift_keypoints`] with
+    /// [`BenchmarkConfig::sift_anchors`]), for [`Method::FaceAnchoredFairedSift`].
+    pub fn add_fairing_keypoints(&mut self, config: &BenchmarkConfig) -> Result<(), EvalError> {
+        self.fairing_keypoints = Some(frame_sift_keypoints(&self.truth, &config.sift_anchors)?);
         Ok(())
     }
 
@@ -480,6 +511,17 @@ impl<'a> PreparedSequence<'a> {
                     }),
                 }),
             sift_anchors: self.sift.as_ref().map(|s| s.points.as_slice()),
+            fairing_keypoints: self
+                .fairing_keypoints
+                .as_ref()
+                .map(|frames| FairingKeypoints {
+                    frames,
+                    options: config.sift_fairing,
+                    random_control: config
+                        .sift_anchors
+                        .random_control
+                        .then(|| mix_seed(self.truth.seed ^ FAIRING_CONTROL_SALT)),
+                }),
         }
     }
 
@@ -626,12 +668,18 @@ pub fn tune_taubin(model: &IctModel, config: &BenchmarkConfig) -> Result<TaubinT
 
 /// Methods scored only when named in [`BenchmarkConfig::methods`]: experiments that did not
 /// earn a place in the default table.
-pub const OPT_IN_METHODS: [Method; 1] = [Method::StreamingSiftAnchors];
+pub const OPT_IN_METHODS: [Method; 2] =
+    [Method::StreamingSiftAnchors, Method::FaceAnchoredFairedSift];
 
-/// Every method the benchmark knows, in table order: [`methods`], then [`OPT_IN_METHODS`].
+/// Every method the benchmark knows, in table order: [`methods`], then [`OPT_IN_METHODS`]
+/// (the face-anchored ones when `anchored`).
 fn all_methods(taubin_iterations: usize, anchored: bool) -> Vec<Method> {
     let mut m = methods(taubin_iterations, anchored);
-    m.extend(OPT_IN_METHODS);
+    m.extend(
+        OPT_IN_METHODS
+            .into_iter()
+            .filter(|&o| anchored || o != Method::FaceAnchoredFairedSift),
+    );
     m
 }
 
@@ -705,6 +753,7 @@ pub fn run_benchmark(
     let taubin_tuning = tune_taubin(model, &config)?;
     let methods = selected_methods(&config, taubin_tuning.iterations, anchoring.is_some())?;
     let with_sift = methods.contains(&Method::StreamingSiftAnchors);
+    let with_fairing_sift = methods.contains(&Method::FaceAnchoredFairedSift);
     let mut accumulators = vec![MetricAccumulator::default(); methods.len()];
     let mut sequences = Vec::new();
     let mut model_scores = Vec::new();
@@ -723,6 +772,14 @@ pub fn run_benchmark(
                 config.sequences
             ));
             seq.add_sift_anchors(&config)?;
+        }
+        if with_fairing_sift {
+            progress(&format!(
+                "sequence {}/{}: SIFT keypoints of every frame",
+                s + 1,
+                config.sequences
+            ));
+            seq.add_fairing_keypoints(&config)?;
         }
         if let (Some(a), Some(tracking)) = (anchoring, &seq.tracking) {
             progress(&format!(
@@ -762,6 +819,14 @@ pub fn run_benchmark(
             mesh_vertices: setup.vertex_count(),
             domain_pixels: seq.domain.count(),
             sift_anchors: seq.sift.as_ref().map(SiftAnchoring::info),
+            sift_fairing: seq.fairing_keypoints.as_ref().and_then(|frames| {
+                let fraction = runs.iter().find_map(|r| r.full_weight_fraction)?;
+                Some(SiftFairingInfo {
+                    keypoints_per_frame: frames.iter().map(Vec::len).sum::<usize>() as f64
+                        / frames.len().max(1) as f64,
+                    full_weight_fraction: fraction,
+                })
+            }),
         });
     }
     let names = methods.iter().map(|m| m.name().to_string());
@@ -854,7 +919,8 @@ mod tests {
         let all = all_methods(3, true);
         let names: std::collections::BTreeSet<&str> = all.iter().map(Method::name).collect();
         assert_eq!(names.len(), all.len(), "{names:?}");
-        assert_eq!(all.len(), 15);
+        assert_eq!(all.len(), 16);
+        assert_eq!(all_methods(3, false).len(), 10);
         for m in OPT_IN_METHODS {
             assert!(!methods(3, true).contains(&m), "{}", m.name());
         }
@@ -881,6 +947,23 @@ mod tests {
             ..BenchmarkConfig::quick()
         };
         assert!(selected_methods(&face, 2, false).is_err());
+        let faired_sift = BenchmarkConfig {
+            methods: Some(vec![
+                "face_anchored_faired_sift".into(),
+                "face_anchored_faired".into(),
+            ]),
+            ..BenchmarkConfig::quick()
+        };
+        faired_sift.validate().unwrap();
+        assert!(selected_methods(&faired_sift, 2, false).is_err());
+        assert_eq!(
+            selected_methods(&faired_sift, 2, true).unwrap(),
+            [
+                Method::Raw,
+                Method::FaceAnchoredFaired,
+                Method::FaceAnchoredFairedSift
+            ]
+        );
         assert_eq!(selected_methods(&face, 2, true).unwrap().len(), 2);
         let unknown = BenchmarkConfig {
             methods: Some(vec!["sift".into()]),

@@ -24,6 +24,7 @@ mod normal;
 mod report;
 mod seed;
 mod sift_anchors;
+mod sift_fairing;
 pub mod simulated_tracker;
 mod skin_texture;
 mod synthesis;
@@ -35,8 +36,8 @@ mod video_report;
 pub use benchmark::{
     methods, run_benchmark, run_sweep, selected_methods, sequence_seed, tune_taubin, AnchoringInfo,
     BenchmarkConfig, BenchmarkResults, FaceAnchoring, PreparedSequence, SequenceInfo,
-    SiftAnchoring, SweepPoint, TaubinTuning, ANCHORED_SUBDIVISION, ANCHORED_WEIGHTS,
-    BENCHMARK_LANDMARK_SMOOTHING, OPT_IN_METHODS, QUICK_EXPRESSIONS, TUNING_SALT,
+    SiftAnchoring, SiftFairingInfo, SweepPoint, TaubinTuning, ANCHORED_SUBDIVISION,
+    ANCHORED_WEIGHTS, BENCHMARK_LANDMARK_SMOOTHING, OPT_IN_METHODS, QUICK_EXPRESSIONS, TUNING_SALT,
 };
 pub use error::EvalError;
 pub use method::{
@@ -52,8 +53,12 @@ pub use normal::standard_normal;
 pub use report::{csv, sweep_table, table, write_results, write_sweep};
 pub use seed::mix_seed;
 pub use sift_anchors::{
-    gray_render, random_control_points, sequence_sift_anchors, sift_anchors, SiftAnchorInfo,
-    SiftAnchorOptions,
+    frame_sift_keypoints, gray_render, random_control_points, sequence_sift_anchors, sift_anchors,
+    SiftAnchorInfo, SiftAnchorOptions,
+};
+pub use sift_fairing::{
+    control_order, keypoint_weights, random_control_weights, FairingKeypoints, SiftFairingOptions,
+    FAIRING_CONTROL_SALT, SIFT_FAIRING_BASE_WEIGHT, SIFT_FAIRING_RADIUS_PX,
 };
 pub use simulated_tracker::{
     simulate_tracking, TrackedSequence, TrackerNoise, BENCHMARK_LATENCY_FRAMES,

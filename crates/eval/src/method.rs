@@ -17,6 +17,9 @@ use visage_fusion::{
 use visage_mesh::Mask;
 use visage_morphable::{FaceFitter, FaceModel, FitOptions};
 
+use crate::sift_fairing::{
+    control_order, keypoint_weights, random_control_weights, FairingKeypoints,
+};
 use crate::simulated_tracker::TrackedSequence;
 use crate::taubin::taubin_smooth;
 use crate::vertex_filter::VertexFilter;
@@ -52,6 +55,15 @@ pub enum Method {
     /// with a smoothing length of [`BENCHMARK_FAIRING_LENGTH_M`], the system measured on the
     /// first frame and factored once, as `visage run --fair`.
     FaceAnchoredFaired,
+    /// [`Method::FaceAnchoredFaired`] with per-frame fairing weights from the SIFT keypoints of
+    /// that frame's colour render ([`MethodInput::fairing_keypoints`],
+    /// [`crate::keypoint_weights`]): full weight at vertices projecting near a keypoint, a
+    /// lower base weight elsewhere, so the fairing smooths more where the image shows no
+    /// detail (paper §3's keypoints as weighted constraints). The system is built and factored
+    /// every frame (the weights change; its time per frame counts the factorisation), its
+    /// operators measured on the first frame as the uniform method's. An experiment: scored
+    /// only when asked for by name ([`crate::OPT_IN_METHODS`]).
+    FaceAnchoredFairedSift,
     /// The morphable model fitted to the tracked landmarks ([`visage_morphable::FaceFitter`]:
     /// pose, the clip's identity, the frame's expression), placed at the face's scale measured
     /// from the depth maps — the depth used for nothing else. Landmarks alone cannot see the
@@ -128,6 +140,8 @@ pub struct MethodInput<'a> {
     pub anchored: Option<AnchoredInput<'a>>,
     /// Anchor points of [`Method::StreamingSiftAnchors`] (pixels; `None`: it cannot run).
     pub sift_anchors: Option<&'a [[f64; 2]]>,
+    /// Per-frame keypoints of [`Method::FaceAnchoredFairedSift`] (`None`: it cannot run).
+    pub fairing_keypoints: Option<FairingKeypoints<'a>>,
 }
 
 /// A method's output on one sequence.
@@ -143,6 +157,9 @@ pub struct MethodRun {
     /// Wall time of the per-frame work over the whole sequence, seconds (the fixed set-up —
     /// mesh, operators, factorisation — excluded; it is shared by every frame).
     pub seconds: f64,
+    /// [`Method::FaceAnchoredFairedSift`]: the mean fraction of vertices at full fairing
+    /// weight (`None` for the other methods).
+    pub full_weight_fraction: Option<f64>,
 }
 
 impl Method {
@@ -158,6 +175,7 @@ impl Method {
             Method::FaceAnchored => "face_anchored",
             Method::FaceAnchoredClip => "face_anchored_clip",
             Method::FaceAnchoredFaired => "face_anchored_faired",
+            Method::FaceAnchoredFairedSift => "face_anchored_faired_sift",
             Method::ModelOnly => "model_only",
             Method::ModelFusion => "model_fusion",
             Method::RawFiltered(VertexFilter::Ema) => "raw_ema",
@@ -231,6 +249,25 @@ impl Method {
                 run.seconds += start.elapsed().as_secs_f64();
                 Ok(run)
             }
+            Method::FaceAnchoredFairedSift => {
+                let a = anchored()?;
+                let keypoints = input.fairing_keypoints.ok_or(EvalError::InvalidConfig {
+                    name: "method",
+                    value: self.name().into(),
+                    reason: "needs the SIFT keypoints of every frame",
+                })?;
+                let mut run = face_anchored(input, &a, None)?;
+                let start = Instant::now();
+                let fraction = fair_frames_weighted(
+                    &mut run.solutions,
+                    &a.domain.triangles,
+                    input.k,
+                    &keypoints,
+                )?;
+                run.seconds += start.elapsed().as_secs_f64();
+                run.full_weight_fraction = Some(fraction);
+                Ok(run)
+            }
             Method::ModelOnly | Method::ModelFusion => {
                 let a = anchored()?;
                 let m = a.model.ok_or(EvalError::InvalidConfig {
@@ -281,6 +318,56 @@ fn fair_frames(solutions: &mut [Mat<f64>], triangles: &[[u32; 3]]) -> Result<(),
     Ok(())
 }
 
+/// [`fair_frames`] with each frame's weights from `keypoints` (its vertices projected with
+/// `k`, [`keypoint_weights`], or the random control's): the operators measured on the first
+/// frame, a system built and factored per frame, each solve from the previous result. Returns
+/// the mean fraction of vertices at full weight.
+fn fair_frames_weighted(
+    solutions: &mut [Mat<f64>],
+    triangles: &[[u32; 3]],
+    k: &Intrinsics,
+    keypoints: &FairingKeypoints<'_>,
+) -> Result<f64, EvalError> {
+    let points = |m: &Mat<f64>| -> Vec<[f64; 3]> {
+        (0..m.nrows())
+            .map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]])
+            .collect()
+    };
+    let Some(first) = solutions.first() else {
+        return Ok(0.0);
+    };
+    let first = points(first);
+    let order = keypoints
+        .random_control
+        .map(|seed| control_order(first.len(), seed));
+    let mut warm = first.clone();
+    let mut full = 0.0;
+    for (index, s) in solutions.iter_mut().enumerate() {
+        let targets = points(s);
+        let found = keypoints.frames.get(index).map_or(&[][..], Vec::as_slice);
+        let mut weights = keypoint_weights(&targets, k, found, &keypoints.options);
+        if let Some(order) = &order {
+            weights = random_control_weights(&weights, &keypoints.options, order);
+        }
+        full += weights.iter().filter(|&&w| w >= 1.0).count() as f64 / weights.len() as f64;
+        let mut system = visage_fem::FairingSystem::new(
+            &first,
+            triangles,
+            &weights,
+            BENCHMARK_FAIRING_LENGTH_M.powi(-4),
+            visage_fem::Preconditioner::Cholesky,
+        )?;
+        let (faired, _, _) = system.solve(&targets, &warm, 1e-10, 200);
+        for (i, p) in faired.iter().enumerate() {
+            for c in 0..3 {
+                s[(i, c)] = p[c];
+            }
+        }
+        warm = faired;
+    }
+    Ok(full / solutions.len() as f64)
+}
+
 /// Back-projection with in-painted holes, then `taubin` smoothing passes (0: none). A frame
 /// without one valid vertex repeats the previous output (zeros at the start).
 fn raw(setup: &FusionSetup, input: &MethodInput<'_>, taubin: usize) -> MethodRun {
@@ -301,6 +388,7 @@ fn raw(setup: &FusionSetup, input: &MethodInput<'_>, taubin: usize) -> MethodRun
         vertices: VertexKind::ImagePlane,
         raw: None,
         seconds: start.elapsed().as_secs_f64(),
+        full_weight_fraction: None,
     }
 }
 
@@ -349,6 +437,7 @@ fn fused(
         vertices: VertexKind::ImagePlane,
         raw: None,
         seconds: start.elapsed().as_secs_f64(),
+        full_weight_fraction: None,
     })
 }
 
@@ -423,6 +512,7 @@ fn face_anchored(
         vertices: VertexKind::Anchored,
         raw: Some(raw),
         seconds: start.elapsed().as_secs_f64(),
+        full_weight_fraction: None,
     })
 }
 
@@ -479,5 +569,6 @@ fn model_run(
         vertices: VertexKind::Model,
         raw: Some(raw),
         seconds: start.elapsed().as_secs_f64(),
+        full_weight_fraction: None,
     })
 }

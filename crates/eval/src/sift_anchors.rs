@@ -106,6 +106,23 @@ pub fn sequence_sift_anchors(
     Ok((points, frames))
 }
 
+/// Keypoint positions `(u, v)` (pixels) of every frame of `seq`, per frame, found as
+/// [`sequence_sift_anchors`] finds them ([`SiftAnchorOptions::frame_step`] and
+/// [`SiftAnchorOptions::random_control`] play no part): the keypoints of
+/// [`crate::Method::FaceAnchoredFairedSift`].
+///
+/// # Errors
+/// A failing render.
+pub fn frame_sift_keypoints(
+    seq: &SyntheticSequence,
+    options: &SiftAnchorOptions,
+) -> Result<Vec<Vec<[f64; 2]>>, EvalError> {
+    let mut finder = AnchorFinder::new(seq, options);
+    (0..seq.frames.len())
+        .map(|index| finder.find(seq, index))
+        .collect()
+}
+
 /// [`SiftAnchorOptions::random_control`]'s points: for each of `points` in `domain` (nearest
 /// pixel set), a uniformly random position in a uniformly random pixel of `domain`, seeded
 /// by `seed`.

@@ -107,23 +107,24 @@ pub struct SyntheticArgs {
     pub max_translation: Option<f64>,
     /// Score only these methods (comma-separated names as in the table; raw is always
     /// scored). The way to run the experiments kept out of the default table:
-    /// streaming_sift_anchors (SIFT keypoints of the first frame as extra mesh vertices).
+    /// streaming_sift_anchors (SIFT keypoints of the first frame as extra mesh vertices),
+    /// face_anchored_faired_sift (fairing weighted by each frame's SIFT keypoints).
     #[arg(long, value_delimiter = ',')]
     pub methods: Vec<String>,
     /// Grid spacing of the image-plane mesh, pixels.
     #[arg(long, default_value_t = visage_fusion::MeshingOptions::default().spacing)]
     pub spacing: u32,
-    /// streaming_sift_anchors: SIFT without doubling the image first (fewer, coarser
-    /// keypoints).
+    /// streaming_sift_anchors, face_anchored_faired_sift: SIFT without doubling the image
+    /// first (fewer, coarser keypoints).
     #[arg(long)]
     pub sift_no_upsample: bool,
-    /// streaming_sift_anchors: keep at most this many keypoints, the strongest (per frame
-    /// searched).
+    /// streaming_sift_anchors, face_anchored_faired_sift: keep at most this many keypoints,
+    /// the strongest (per frame searched).
     #[arg(long)]
     pub sift_max_keypoints: Option<usize>,
-    /// streaming_sift_anchors: find the keypoints on renders with a seeded procedural skin
-    /// texture (blotches, pores, freckles) instead of the constant albedo; the depth inputs
-    /// are unchanged.
+    /// streaming_sift_anchors, face_anchored_faired_sift: find the keypoints on renders with a
+    /// seeded procedural skin texture (blotches, pores, freckles) instead of the constant
+    /// albedo; the depth inputs are unchanged.
     #[arg(long)]
     pub sift_textured: bool,
     /// streaming_sift_anchors: search frames 0, K, 2K, … and add the union of their keypoints
@@ -131,9 +132,14 @@ pub struct SyntheticArgs {
     #[arg(long, value_name = "K")]
     pub sift_frame_step: Option<usize>,
     /// streaming_sift_anchors, a control: replace the keypoints inside the meshing domain by
-    /// as many seeded random points of it.
+    /// as many seeded random points of it; face_anchored_faired_sift: give full weight to as
+    /// many seeded random vertices per frame as the keypoints do.
     #[arg(long)]
     pub sift_random_control: bool,
+    /// face_anchored_faired_sift: the fairing weight of the vertices not within 3 px of a
+    /// keypoint, in (0, 1] (those within: 1).
+    #[arg(long, value_name = "W", default_value_t = visage_eval::SIFT_FAIRING_BASE_WEIGHT)]
+    pub sift_fairing_base_weight: f64,
 }
 
 /// Runs `visage eval`.
@@ -189,6 +195,7 @@ fn config(args: &SyntheticArgs) -> anyhow::Result<BenchmarkConfig> {
     c.sift_anchors.textured = args.sift_textured;
     c.sift_anchors.frame_step = args.sift_frame_step;
     c.sift_anchors.random_control = args.sift_random_control;
+    c.sift_fairing.base_weight = args.sift_fairing_base_weight;
     if args.sweep_lambda.is_empty() != args.sweep_mu.is_empty() {
         bail!("--sweep-lambda and --sweep-mu go together");
     }
@@ -307,6 +314,7 @@ mod tests {
             sift_textured: false,
             sift_frame_step: None,
             sift_random_control: false,
+            sift_fairing_base_weight: visage_eval::SIFT_FAIRING_BASE_WEIGHT,
         }
     }
 
@@ -403,6 +411,19 @@ mod tests {
         assert!(!c.sift_anchors.random_control);
         assert!(!c.sift_anchors.textured);
         assert_eq!(c.sift_anchors.frame_step, None);
+        assert_eq!(c.sift_fairing, visage_eval::SiftFairingOptions::default());
+        let weighted = config(&SyntheticArgs {
+            methods: vec!["face_anchored_faired_sift".into()],
+            sift_fairing_base_weight: 0.5,
+            ..args()
+        })
+        .unwrap();
+        assert_eq!(weighted.sift_fairing.base_weight, 0.5);
+        assert!(config(&SyntheticArgs {
+            sift_fairing_base_weight: 0.0,
+            ..args()
+        })
+        .is_err());
         assert!(config(&SyntheticArgs {
             sift_frame_step: Some(0),
             ..args()
