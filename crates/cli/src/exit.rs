@@ -11,7 +11,7 @@ pub struct Failure {
 
 impl std::fmt::Display for Failure {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{:#}", self.error)
+        f.write_str(&visage::error_chain(self.error.as_ref()))
     }
 }
 
@@ -37,7 +37,7 @@ pub fn report(result: anyhow::Result<()>) -> ExitCode {
                 None if internal => INTERNAL,
                 None => BAD_INPUT,
             };
-            eprintln!("error: {err:#}");
+            eprintln!("error: {}", visage::error_chain(err.as_ref()));
             ExitCode::from(code)
         }
     }

@@ -340,6 +340,8 @@ fn bad_input_exits_2_and_names_the_file() {
     let missing = d.join("missing.png");
     let err = bad_input(&["keypoints", s(&missing), "--out", s(&out)]);
     assert!(err.contains("missing.png"), "{err}");
+    // The cause once: the file error already quotes the system's message.
+    assert_eq!(err.matches("os error 2").count(), 1, "{err}");
     let err = bad_input(&["match", s(&image), s(&missing)]);
     assert!(err.contains("missing.png"), "{err}");
 

@@ -83,4 +83,11 @@ fn bad_inputs_are_errors_that_name_the_file() {
     )
     .unwrap();
     fails_with("ok.obj", &["cam.json", "fx"]);
+    // A malformed file: its parser's message once, not once per layer of the error chain.
+    std::fs::write(d.join("cam.json"), r#"{"width": 8, "height": "#).unwrap();
+    let o = render(d, "ok.obj", &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("cam.json"), "{err}");
+    assert_eq!(err.matches("EOF while parsing").count(), 1, "{err}");
 }

@@ -145,13 +145,17 @@ impl RunOutcome {
     }
 }
 
-/// An error and its causes, `: `-separated.
+/// An error and its causes, `: `-separated; a cause whose text the message already ends with
+/// (many errors quote their source) is not repeated.
 pub fn error_chain(e: &(dyn std::error::Error + 'static)) -> String {
     let mut text = e.to_string();
     let mut cause = e.source();
     while let Some(c) = cause {
-        text.push_str(": ");
-        text.push_str(&c.to_string());
+        let part = c.to_string();
+        if !text.ends_with(&part) {
+            text.push_str(": ");
+            text.push_str(&part);
+        }
         cause = c.source();
     }
     text
@@ -451,5 +455,37 @@ impl Builder {
     pub fn build_for(self, input: &Input) -> Result<Reconstructor, Error> {
         let k = self.intrinsics_for_input(input)?;
         Reconstructor::new(self, k, input.frame_rate())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug)]
+    struct Quoting(std::io::Error);
+
+    impl std::fmt::Display for Quoting {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            write!(f, "x.png: {}", self.0)
+        }
+    }
+
+    impl std::error::Error for Quoting {
+        fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+            Some(&self.0)
+        }
+    }
+
+    #[test]
+    fn a_cause_the_message_already_quotes_is_not_repeated() {
+        let e = Quoting(std::io::Error::other("no such file"));
+        assert_eq!(error_chain(&e), "x.png: no such file");
+        let wrapped = Error::Write {
+            path: "out.json".into(),
+            source: std::io::Error::other("disk full"),
+        };
+        let text = error_chain(&wrapped);
+        assert_eq!(text.matches("disk full").count(), 1, "{text}");
     }
 }
