@@ -287,15 +287,10 @@ pub const BENCHMARK_FAIRING_LENGTH_M: f64 = 0.002;
 /// Fairs every frame's surface in place: the system from the first frame, each solve from the
 /// previous result.
 fn fair_frames(solutions: &mut [Mat<f64>], triangles: &[[u32; 3]]) -> Result<(), EvalError> {
-    let points = |m: &Mat<f64>| -> Vec<[f64; 3]> {
-        (0..m.nrows())
-            .map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]])
-            .collect()
-    };
     let Some(first) = solutions.first() else {
         return Ok(());
     };
-    let first = points(first);
+    let first = mat_points(first);
     let weights = vec![1.0; first.len()];
     let mut system = visage_fem::FairingSystem::new(
         &first,
@@ -306,16 +301,28 @@ fn fair_frames(solutions: &mut [Mat<f64>], triangles: &[[u32; 3]]) -> Result<(),
     )?;
     let mut warm = first;
     for s in solutions.iter_mut() {
-        let targets = points(s);
+        let targets = mat_points(s);
         let (faired, _, _) = system.solve(&targets, &warm, 1e-10, 200);
-        for (i, p) in faired.iter().enumerate() {
-            for c in 0..3 {
-                s[(i, c)] = p[c];
-            }
-        }
+        set_points(s, &faired);
         warm = faired;
     }
     Ok(())
+}
+
+/// The rows of a #V × 3 solution as points.
+fn mat_points(m: &Mat<f64>) -> Vec<[f64; 3]> {
+    (0..m.nrows())
+        .map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]])
+        .collect()
+}
+
+/// Writes `points` into the rows of a #V × 3 solution.
+fn set_points(m: &mut Mat<f64>, points: &[[f64; 3]]) {
+    for (i, p) in points.iter().enumerate() {
+        for (c, &v) in p.iter().enumerate() {
+            m[(i, c)] = v;
+        }
+    }
 }
 
 /// [`fair_frames`] with each frame's weights from `keypoints` (its vertices projected with
@@ -328,22 +335,17 @@ fn fair_frames_weighted(
     k: &Intrinsics,
     keypoints: &FairingKeypoints<'_>,
 ) -> Result<f64, EvalError> {
-    let points = |m: &Mat<f64>| -> Vec<[f64; 3]> {
-        (0..m.nrows())
-            .map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]])
-            .collect()
-    };
     let Some(first) = solutions.first() else {
         return Ok(0.0);
     };
-    let first = points(first);
+    let first = mat_points(first);
     let order = keypoints
         .random_control
         .map(|seed| control_order(first.len(), seed));
     let mut warm = first.clone();
     let mut full = 0.0;
     for (index, s) in solutions.iter_mut().enumerate() {
-        let targets = points(s);
+        let targets = mat_points(s);
         let found = keypoints.frames.get(index).map_or(&[][..], Vec::as_slice);
         let mut weights = keypoint_weights(&targets, k, found, &keypoints.options);
         if let Some(order) = &order {
@@ -358,11 +360,7 @@ fn fair_frames_weighted(
             visage_fem::Preconditioner::Cholesky,
         )?;
         let (faired, _, _) = system.solve(&targets, &warm, 1e-10, 200);
-        for (i, p) in faired.iter().enumerate() {
-            for c in 0..3 {
-                s[(i, c)] = p[c];
-            }
-        }
+        set_points(s, &faired);
         warm = faired;
     }
     Ok(full / solutions.len() as f64)
