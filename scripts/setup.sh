@@ -3,7 +3,8 @@
 #
 #   scripts/setup.sh          install system packages, build the report's 3-D viewer (npm) and
 #                             visage (release), fetch the pinned MediaPipe models (npm, and the
-#                             iris network from PyPI), run the sample job into out/sample/
+#                             iris network and full-range detector from PyPI), run the sample
+#                             job into out/sample/
 #   scripts/setup.sh --ci     packages, viewer and models only (what the test suite needs)
 #
 # Needs: a Rust toolchain (cargo), Node.js/npm (for `npm pack` and the viewer's pinned
@@ -47,8 +48,8 @@ else
   bin="$target_dir/release/visage"
 fi
 
-# Model files: npm package @mediapipe/face_mesh and the iris network from the PyPI wheel
-# mediapipe==0.10.21, pinned and sha256-checked, into models/.
+# Model files: npm package @mediapipe/face_mesh, and the iris network and the full-range face
+# detector from the PyPI wheel mediapipe==0.10.21, pinned and sha256-checked, into models/.
 "$bin" models fetch
 
 [ "$mode" = ci ] && exit 0

@@ -1,21 +1,39 @@
-//! SSD anchors of BlazeFace short range (MediaPipe `SsdAnchorsCalculator` with the options of
-//! `face_detection_short_range.pbtxt`: 4 layers, strides 8, 16, 16, 16, aspect ratio 1,
-//! interpolated scale 1, `fixed_anchor_size`, anchor offset 0.5).
+//! SSD anchors of MediaPipe's face detectors (`SsdAnchorsCalculator`, aspect ratio 1,
+//! `fixed_anchor_size`, anchor offset 0.5, so only the centres matter):
+//! - short range (`face_detection_short_range.pbtxt`): 4 layers, strides 8, 16, 16, 16,
+//!   interpolated scale aspect ratio 1. Layers of equal stride are merged, giving a 16×16 grid
+//!   with 2 anchors per cell then an 8×8 grid with 6 per cell: 896 anchors;
+//! - full range (`face_detection_full_range.pbtxt`): 1 layer, stride 4 on the 192×192 input,
+//!   interpolated scale aspect ratio 0 (no extra anchor): a 48×48 grid with one anchor per cell,
+//!   2304 anchors.
 //!
-//! Layers of equal stride are merged, giving a 16×16 grid with 2 anchors per cell then an 8×8 grid
-//! with 6 per cell: 896 anchors, row-major over cells, anchors of a cell consecutive.
+//! Anchors are row-major over cells, the anchors of a cell consecutive.
 
-/// Input side of the detector, pixels.
+/// Input side of the short-range detector, pixels.
 pub const DETECTOR_INPUT: usize = 128;
-/// Number of anchors (= rows of the detector outputs).
+/// Number of anchors of the short-range detector (= rows of its outputs).
 pub const NUM_ANCHORS: usize = 896;
+/// Input side of the full-range detector, pixels.
+pub const FULL_RANGE_INPUT: usize = 192;
+/// Number of anchors of the full-range detector.
+pub const FULL_RANGE_ANCHORS: usize = 2304;
 
-/// Anchor centres `(x, y)` normalised to the 128×128 input, in output order.
+/// Anchor centres `(x, y)` of the short-range detector, normalised to its 128×128 input, in
+/// output order.
 pub fn blazeface_anchors() -> Vec<[f32; 2]> {
-    // (grid size, anchors per cell)
-    const LAYERS: [(usize, usize); 2] = [(16, 2), (8, 6)];
-    let mut out = Vec::with_capacity(NUM_ANCHORS);
-    for (grid, per_cell) in LAYERS {
+    grid_anchors(&[(16, 2), (8, 6)])
+}
+
+/// Anchor centres `(x, y)` of the full-range detector, normalised to its 192×192 input:
+/// `((x + ½)/48, (y + ½)/48)`, row-major.
+pub fn full_range_anchors() -> Vec<[f32; 2]> {
+    grid_anchors(&[(FULL_RANGE_INPUT / 4, 1)])
+}
+
+/// Cell centres of square grids `(grid size, anchors per cell)`, one grid after the other.
+fn grid_anchors(layers: &[(usize, usize)]) -> Vec<[f32; 2]> {
+    let mut out = Vec::with_capacity(layers.iter().map(|(g, n)| g * g * n).sum());
+    for &(grid, per_cell) in layers {
         for y in 0..grid {
             for x in 0..grid {
                 let centre = [
@@ -44,5 +62,11 @@ mod tests {
         assert_eq!(a[512], [1.0 / 16.0, 1.0 / 16.0]);
         assert_eq!(a[517], a[512]);
         assert_eq!(a[895], [15.0 / 16.0, 15.0 / 16.0]);
+        let f = full_range_anchors();
+        assert_eq!(f.len(), FULL_RANGE_ANCHORS);
+        assert_eq!(f[0], [0.5 / 48.0, 0.5 / 48.0]);
+        assert_eq!(f[1], [1.5 / 48.0, 0.5 / 48.0]);
+        assert_eq!(f[48], [0.5 / 48.0, 1.5 / 48.0]);
+        assert_eq!(f[2303], [47.5 / 48.0, 47.5 / 48.0]);
     }
 }

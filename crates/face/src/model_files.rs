@@ -7,8 +7,8 @@
 //!   files give the same outputs as those of the `mediapipe==0.10.21` wheel that produced
 //!   `shared/reference/facemesh`.
 //! - the PyPI wheel `mediapipe==0.10.21` ([`WHEEL_FILE`], downloaded with `pip download`, opened
-//!   with Python's `zipfile`): the iris network `iris_landmark.tflite`, which the npm package
-//!   lacks.
+//!   with Python's `zipfile`): the iris network `iris_landmark.tflite` and the full-range face
+//!   detector `face_detection_full_range_sparse.tflite`, which the npm package lacks.
 //!
 //! Every archive and every extracted file is checked against a pinned SHA-256; nothing downloads
 //! at run time.
@@ -33,7 +33,7 @@ pub const MODELS_ENV: &str = "VISAGE_MODELS";
 /// Model directory name, relative to the working directory (see [`models_dir`]).
 pub const DEFAULT_MODELS_DIR: &str = "models";
 
-/// The PyPI distribution the iris network comes from.
+/// The PyPI distribution the iris network and the full-range detector come from.
 pub const PYPI_PACKAGE: &str = "mediapipe";
 /// The pinned wheel version.
 pub const PYPI_VERSION: &str = "0.10.21";
@@ -75,9 +75,10 @@ Copyright Google LLC, licensed under the Apache License, Version 2.0 \
 (https://www.apache.org/licenses/LICENSE-2.0). face_landmark.tflite, \
 face_detection_short_range.tflite and geometry_pipeline_metadata_landmarks.binarypb are \
 extracted from the npm package @mediapipe/face_mesh version 0.4.1657299874; \
-iris_landmark.tflite is extracted from the PyPI wheel mediapipe==0.10.21 \
-(mediapipe-0.10.21-cp311-cp311-manylinux_2_28_x86_64.whl, \
-mediapipe/modules/iris_landmark/iris_landmark.tflite). \
+iris_landmark.tflite and face_detection_full_range_sparse.tflite are extracted from the PyPI \
+wheel mediapipe==0.10.21 (mediapipe-0.10.21-cp311-cp311-manylinux_2_28_x86_64.whl, \
+mediapipe/modules/iris_landmark/iris_landmark.tflite and \
+mediapipe/modules/face_detection/face_detection_full_range_sparse.tflite). \
 They are distributed on an \"AS IS\" BASIS, WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND. \
 visage reads them unmodified; run `visage models fetch` to recreate them.\n";
 
@@ -90,7 +91,7 @@ pub enum ModelSource {
     PypiWheel,
 }
 
-/// One of the four pinned files.
+/// One of the five pinned files.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ModelFile {
     /// `face_landmark.tflite`: 192×192 RGB → 468 landmarks + presence (FaceMesh, no attention).
@@ -102,22 +103,38 @@ pub enum ModelFile {
     /// `iris_landmark.tflite`: 64×64 RGB eye crop → 71 eye-contour and brow points + 5 iris
     /// points (MediaPipe Iris). Optional at run time: without it faces have no eyes.
     IrisLandmark,
+    /// `face_detection_full_range_sparse.tflite`: 192×192 RGB → 2304 anchors (MediaPipe's
+    /// full-range face detector, small and distant faces). Optional at run time
+    /// ([`crate::FaceDetector::load_full_range_if_present`]).
+    FaceDetectionFullRange,
 }
 
 impl ModelFile {
     /// All pinned files.
-    pub const ALL: [ModelFile; 4] = [
+    pub const ALL: [ModelFile; 5] = [
         ModelFile::FaceLandmark,
         ModelFile::FaceDetectionShortRange,
         ModelFile::GeometryPipelineMetadata,
         ModelFile::IrisLandmark,
+        ModelFile::FaceDetectionFullRange,
     ];
 
     /// Where the file is fetched from.
     pub fn source(self) -> ModelSource {
         match self {
-            ModelFile::IrisLandmark => ModelSource::PypiWheel,
+            ModelFile::IrisLandmark | ModelFile::FaceDetectionFullRange => ModelSource::PypiWheel,
             _ => ModelSource::Npm,
+        }
+    }
+
+    /// The file's path inside [`WHEEL_FILE`], for the files from the wheel.
+    pub fn wheel_member(self) -> Option<&'static str> {
+        match self {
+            ModelFile::IrisLandmark => Some("mediapipe/modules/iris_landmark/iris_landmark.tflite"),
+            ModelFile::FaceDetectionFullRange => {
+                Some("mediapipe/modules/face_detection/face_detection_full_range_sparse.tflite")
+            }
+            _ => None,
         }
     }
 
@@ -128,6 +145,7 @@ impl ModelFile {
             ModelFile::FaceDetectionShortRange => "face_detection_short_range.tflite",
             ModelFile::GeometryPipelineMetadata => "geometry_pipeline_metadata_landmarks.binarypb",
             ModelFile::IrisLandmark => "iris_landmark.tflite",
+            ModelFile::FaceDetectionFullRange => "face_detection_full_range_sparse.tflite",
         }
     }
 
@@ -145,6 +163,9 @@ impl ModelFile {
             }
             ModelFile::IrisLandmark => {
                 "d1744d2a09c25f501d39eba4faff47e53ecca8852c5ce19bce8eeac39357521f"
+            }
+            ModelFile::FaceDetectionFullRange => {
+                "2c3728e6da56f21e21a320433396fb06d40d9088f2247c05e5635a688d45dfe1"
             }
         }
     }
@@ -337,8 +358,8 @@ pub fn extract_from_tarball(tarball: &Path, dir: &Path) -> Result<Vec<PathBuf>, 
 }
 
 /// Downloads [`WHEEL_FILE`] with `python3 -m pip download` (pinned version, platform and Python
-/// tag, no dependencies) into a temporary folder inside `dir` and extracts the iris network from
-/// it (see [`extract_from_wheel`]). Needs Python 3 with pip and access to PyPI. Returns the paths
+/// tag, no dependencies) into a temporary folder inside `dir` and extracts the iris network and
+/// the full-range detector from it (see [`extract_from_wheel`]). Needs Python 3 with pip and access to PyPI. Returns the paths
 /// written.
 pub fn fetch_with_pip(dir: &Path) -> Result<Vec<PathBuf>, FaceError> {
     let io = |path: &Path| {
@@ -375,9 +396,10 @@ pub fn fetch_with_pip(dir: &Path) -> Result<Vec<PathBuf>, FaceError> {
     result
 }
 
-/// Extracts `iris_landmark.tflite` from the wheel [`WHEEL_FILE`]: checks the wheel's SHA-256,
-/// reads the member `mediapipe/modules/iris_landmark/iris_landmark.tflite` with Python's
-/// `zipfile` (a wheel is a zip archive), verifies the file's SHA-256 and writes it (atomically)
+/// Extracts the wheel's pinned files (`iris_landmark.tflite`,
+/// `face_detection_full_range_sparse.tflite`) from [`WHEEL_FILE`]: checks the wheel's SHA-256,
+/// reads each member ([`ModelFile::wheel_member`]) with Python's `zipfile` (a wheel is a zip
+/// archive), verifies every file's SHA-256 before writing any, then writes them (atomically)
 /// with the `NOTICE`.
 pub fn extract_from_wheel(wheel: &Path, dir: &Path) -> Result<Vec<PathBuf>, FaceError> {
     let fetch = |reason: String| FaceError::Fetch {
@@ -394,39 +416,49 @@ pub fn extract_from_wheel(wheel: &Path, dir: &Path) -> Result<Vec<PathBuf>, Face
         )));
     }
     drop(bytes);
-    let file = ModelFile::IrisLandmark;
-    let member = format!("mediapipe/modules/iris_landmark/{}", file.file_name());
-    let out = Command::new(PYTHON)
-        .args([
-            "-c",
-            "import sys, zipfile; sys.stdout.buffer.write(zipfile.ZipFile(sys.argv[1]).read(sys.argv[2]))",
-        ])
-        .arg(wheel)
-        .arg(&member)
-        .output()
-        .map_err(|e| fetch(format!("cannot run {PYTHON} to open the wheel ({e})")))?;
-    if !out.status.success() {
-        return Err(fetch(format!(
-            "cannot extract {member}: {}",
-            String::from_utf8_lossy(&out.stderr).trim()
-        )));
-    }
-    let sha = sha256_hex(&out.stdout);
-    if sha != file.sha256() {
-        return Err(fetch(format!(
-            "{member} has sha256 {sha}, expected {}",
-            file.sha256()
-        )));
+    let mut extracted = Vec::new();
+    for file in ModelFile::ALL {
+        let Some(member) = file.wheel_member() else {
+            continue;
+        };
+        let out = Command::new(PYTHON)
+            .args([
+                "-c",
+                "import sys, zipfile; sys.stdout.buffer.write(zipfile.ZipFile(sys.argv[1]).read(sys.argv[2]))",
+            ])
+            .arg(wheel)
+            .arg(member)
+            .output()
+            .map_err(|e| fetch(format!("cannot run {PYTHON} to open the wheel ({e})")))?;
+        if !out.status.success() {
+            return Err(fetch(format!(
+                "cannot extract {member}: {}",
+                String::from_utf8_lossy(&out.stderr).trim()
+            )));
+        }
+        let sha = sha256_hex(&out.stdout);
+        if sha != file.sha256() {
+            return Err(fetch(format!(
+                "{member} has sha256 {sha}, expected {}",
+                file.sha256()
+            )));
+        }
+        extracted.push((file, out.stdout));
     }
     std::fs::create_dir_all(dir).map_err(|source| FaceError::Io {
         path: dir.to_owned(),
         source,
     })?;
-    let path = dir.join(file.file_name());
-    write_atomic(&path, &out.stdout)?;
+    let mut written = Vec::new();
+    for (file, bytes) in extracted {
+        let path = dir.join(file.file_name());
+        write_atomic(&path, &bytes)?;
+        written.push(path);
+    }
     let notice = dir.join("NOTICE");
     write_atomic(&notice, NOTICE.as_bytes())?;
-    Ok(vec![path, notice])
+    written.push(notice);
+    Ok(written)
 }
 
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FaceError> {
@@ -505,6 +537,10 @@ mod tests {
             .to_string();
         assert!(err.contains(WHEEL_FILE) && err.contains("sha256"), "{err}");
         assert!(!dir.path().join("iris_landmark.tflite").exists());
+        assert!(!dir
+            .path()
+            .join("face_detection_full_range_sparse.tflite")
+            .exists());
     }
 
     #[test]
@@ -515,7 +551,19 @@ mod tests {
             .count();
         assert_eq!(npm, 3, "the npm package's three files keep their source");
         assert_eq!(ModelFile::IrisLandmark.source(), ModelSource::PypiWheel);
+        assert_eq!(
+            ModelFile::FaceDetectionFullRange.source(),
+            ModelSource::PypiWheel
+        );
         for (i, a) in ModelFile::ALL.iter().enumerate() {
+            // Exactly the wheel's files have a member path, ending in their file name.
+            match a.wheel_member() {
+                Some(m) => {
+                    assert_eq!(a.source(), ModelSource::PypiWheel);
+                    assert!(m.ends_with(&format!("/{}", a.file_name())), "{m}");
+                }
+                None => assert_eq!(a.source(), ModelSource::Npm),
+            }
             for b in &ModelFile::ALL[i + 1..] {
                 assert_ne!(a.file_name(), b.file_name());
             }

@@ -36,6 +36,7 @@ fn one_conv(
         shape,
         dtype: TensorType::Float32,
         buffer,
+        sparsity: None,
     };
     let (out_h, out_w) = (h.div_ceil(stride), w.div_ceil(stride));
     let model = TfliteModel {

@@ -1,31 +1,35 @@
 //! A small CPU inference engine for TFLite convolutional networks, in pure Rust: it runs
-//! MediaPipe's BlazeFace detector and FaceMesh landmark network (used by `visage-face`) from the
-//! original `.tflite` files, without TensorFlow, tract or a C library.
+//! MediaPipe's face detectors (BlazeFace short range, full range), FaceMesh landmark network and
+//! iris network (used by `visage-face`) from the original `.tflite` files, without TensorFlow,
+//! tract or a C library.
 //!
 //! # What it runs
 //! One subgraph with one float32 input, batch 1, NHWC tensors; activations are float32, constant
-//! tensors float32, float16 or int32 (pad amounts). The operators are those of MediaPipe's face
-//! networks:
+//! tensors float32, float16 (dense, or sparse behind `DENSIFY`) or int32 (pad amounts, sizes).
+//! The operators are those of MediaPipe's face networks:
 //!
 //! | TFLite operator | kernel |
 //! |---|---|
-//! | `CONV_2D` | [`ops::conv2d`]: 1×1 stride-1 as a register-blocked GEMM (4 pixels × 16/8/4 output channels), other sizes through a small im2col |
+//! | `CONV_2D` | [`ops::conv2d`]: 1×1 stride-1 as a register-blocked GEMM (4 pixels × 16/8/4 output channels), other sizes through a small im2col; fused `RELU` applied to the register block before the store |
 //! | `DEPTHWISE_CONV_2D` | [`ops::depthwise_conv2d`] (depth multiplier 1; 3×3 interior rows with the nine weight vectors in registers) |
 //! | `MAX_POOL_2D` | [`ops::max_pool2d`] |
 //! | `PAD` | [`ops::pad4`] (constant int32 paddings) |
-//! | `ADD` | [`ops::add`] (same shapes, no broadcasting) |
+//! | `ADD` | [`ops::add`] (same shapes, no broadcasting; optional fused `RELU`) |
 //! | `PRELU` / `RELU` | [`ops::prelu`] (one slope per channel) / [`ops::relu`] |
+//! | `RESIZE_BILINEAR` | [`ops::resize_bilinear`] (constant size; `half_pixel_centers` or `align_corners`, TensorFlow's sampling) |
+//! | `DEPTH_TO_SPACE` | [`ops::depth_to_space`] (TensorFlow's DCR order) |
 //! | `RESHAPE`, `CONCATENATION` | copies |
-//! | `DEQUANTIZE` | folded at load time (below) |
+//! | `DEQUANTIZE`, `DENSIFY` | folded at load time (below) |
 //!
 //! Convolutions and pooling follow TensorFlow's `SAME`/`VALID` padding ([`ops::Window`]); fused
-//! activations, dilation and broadcasting adds are rejected when the graph is compiled, with a
-//! [`NnError`] naming the operator.
+//! activations other than `RELU` on `CONV_2D` and `ADD`, dilation and broadcasting adds are
+//! rejected when the graph is compiled, with a [`NnError`] naming the operator.
 //!
 //! # Pipeline
 //! - [`tflite`] reads the flatbuffer by hand, bounds-checked: a corrupt or truncated file is an
 //!   error, never a panic.
-//! - [`Network::compile`] folds float16 constants behind `DEQUANTIZE` to f32 once
+//! - [`Network::compile`] expands sparse constants ([`sparse`], TFLite's CSR format, the
+//!   full-range detector's kernels) and folds float16 constants behind `DEQUANTIZE` to f32 once
 //!   ([`float16`], exact conversion), re-lays out convolution weights as
 //!   `[k_h·k_w·C_in, C_out]` (output channels contiguous) and shares activation buffers between
 //!   tensors whose lifetimes do not overlap, so the working set stays in cache.
@@ -55,10 +59,17 @@
 //! # }
 //! ```
 
+// Unsafe code is denied except in `network`, whose one block calls the AVX2 + FMA build of the
+// kernels after the run-time CPU check (`SAFETY:` there).
+#![deny(unsafe_code)]
+#![deny(unsafe_op_in_unsafe_fn, clippy::undocumented_unsafe_blocks)]
+
 mod error;
 pub mod float16;
+#[allow(unsafe_code)]
 pub mod network;
 pub mod ops;
+pub mod sparse;
 pub mod tflite;
 
 pub use error::NnError;

@@ -2,13 +2,15 @@
 //! over pre-allocated buffers, then run per input without allocating.
 //!
 //! Why not tract: `tract-tflite` 0.23 refuses MediaPipe's face networks (no `DEQUANTIZE`, no
-//! `PRELU`, registry not extensible). Those networks use ten operators, all NHWC with batch 1, so
-//! the engine folds the float16 `DEQUANTIZE` constants to f32 at load time, re-lays out
+//! `PRELU`, registry not extensible). Those networks use thirteen operators, all NHWC with batch
+//! 1, so the engine expands the sparse `DENSIFY` constants and folds the float16 `DEQUANTIZE`
+//! constants to f32 at load time, re-lays out
 //! convolution weights for channel-contiguous inner loops and runs the hand-written kernels of
 //! [`crate::ops`].
 
 use crate::float16::f16_slice_to_f32;
-use crate::ops::{self, Conv2dWeights, Fused, Madd, Plain, Window};
+use crate::ops::{self, Activation, Conv2dWeights, Fused, Madd, Plain, ResizeAxis, Window};
+use crate::sparse::densify;
 use crate::tflite::{OpCode, TensorType, TfliteModel};
 use crate::NnError;
 
@@ -20,6 +22,7 @@ enum Step {
         y: usize,
         win: Window,
         wts: Conv2dWeights,
+        act: Activation,
     },
     Depthwise {
         x: usize,
@@ -42,6 +45,23 @@ enum Step {
         a: usize,
         b: usize,
         y: usize,
+        act: Activation,
+    },
+    Resize {
+        x: usize,
+        y: usize,
+        in_w: usize,
+        c: usize,
+        rows: ResizeAxis,
+        cols: ResizeAxis,
+    },
+    DepthToSpace {
+        x: usize,
+        y: usize,
+        h: usize,
+        w: usize,
+        c_out: usize,
+        block: usize,
     },
     MaxPool {
         x: usize,
@@ -107,7 +127,7 @@ impl Network {
             if data.is_empty() {
                 continue;
             }
-            let count: usize = t.shape.iter().product();
+            let dense_count: usize = t.shape.iter().product();
             let width = match t.dtype {
                 TensorType::Float32 | TensorType::Int32 => 4,
                 TensorType::Float16 => 2,
@@ -118,7 +138,12 @@ impl Network {
                     ))
                 }
             };
-            if data.len() != count * width {
+            // A sparse constant stores only its non-zeros; it is expanded below.
+            let count_ok = match t.sparsity {
+                Some(_) => data.len().is_multiple_of(width),
+                None => Some(data.len()) == dense_count.checked_mul(width),
+            };
+            if !count_ok {
                 return Err(err(
                     name,
                     format!(
@@ -147,6 +172,17 @@ impl Network {
                 }
                 TensorType::Other(_) => {}
             }
+            if let Some(sparsity) = &t.sparsity {
+                let values = consts[i].take().ok_or_else(|| {
+                    err(
+                        name,
+                        format!("sparse tensor {} is not floating-point", t.name),
+                    )
+                })?;
+                let dense = densify(sparsity, &t.shape, &values)
+                    .map_err(|e| err(name, format!("sparse tensor {}: {e}", t.name)))?;
+                consts[i] = Some(dense);
+            }
         }
         let Some(&input) = model.inputs.first() else {
             return Err(err(name, "no graph input".into()));
@@ -158,12 +194,14 @@ impl Network {
         }
         for (k, op) in model.operators.iter().enumerate() {
             let ctx = |reason: String| err(name, format!("operator {k} ({:?}): {reason}", op.code));
-            if op.options.activation != 0 {
-                return Err(ctx(format!(
-                    "fused activation {} not supported",
-                    op.options.activation
-                )));
-            }
+            // Fused activations: RELU on CONV_2D and ADD (their kernels apply it), none elsewhere.
+            let act = match (op.options.activation, op.code) {
+                (0, _) => Activation::None,
+                (1, OpCode::Conv2d | OpCode::Add) => Activation::Relu,
+                (a, _) => {
+                    return Err(ctx(format!("fused activation {a} not supported")));
+                }
+            };
             let input = |j: usize| -> Result<usize, NnError> {
                 op.inputs
                     .get(j)
@@ -206,6 +244,18 @@ impl Network {
                     consts[y] = Some(constant(x)?.clone());
                     continue;
                 }
+                OpCode::Densify => {
+                    // The sparse input was expanded when the constants were read.
+                    let x = input(0)?;
+                    if model.tensors[x].sparsity.is_none() || shapes[x] != shapes[y] {
+                        return Err(ctx(format!(
+                            "input {} must be a sparse constant of the output's shape",
+                            model.tensors[x].name
+                        )));
+                    }
+                    consts[y] = Some(constant(x)?.clone());
+                    continue;
+                }
                 OpCode::Conv2d => {
                     let x = activation(input(0)?)?;
                     let [h, w, ci] = nhwc(x)?;
@@ -223,7 +273,13 @@ impl Network {
                     let win = Window::new(h, w, [kh, kw], op.options.stride, op.options.padding);
                     check_out(&ctx, &shapes[y], [win.out_h, win.out_w, co])?;
                     let wts = Conv2dWeights::from_ohwi(kernel, co, kh, kw, ci, bias.clone());
-                    Step::Conv { x, y, win, wts }
+                    Step::Conv {
+                        x,
+                        y,
+                        win,
+                        wts,
+                        act,
+                    }
                 }
                 OpCode::DepthwiseConv2d => {
                     let x = activation(input(0)?)?;
@@ -278,7 +334,55 @@ impl Network {
                             shapes[a], shapes[b]
                         )));
                     }
-                    Step::Add { a, b, y }
+                    Step::Add { a, b, y, act }
+                }
+                OpCode::ResizeBilinear => {
+                    let x = activation(input(0)?)?;
+                    let [h, w, c] = nhwc(x)?;
+                    let size = ints[input(1)?]
+                        .as_ref()
+                        .ok_or_else(|| ctx("size must be a constant int32 tensor".into()))?;
+                    let &[oh, ow] = size.as_slice() else {
+                        return Err(ctx(format!("size {size:?}")));
+                    };
+                    let (oh, ow) = (usize::try_from(oh), usize::try_from(ow));
+                    let (Ok(oh), Ok(ow)) = (oh, ow) else {
+                        return Err(ctx(format!("negative size {size:?}")));
+                    };
+                    if h == 0 || w == 0 {
+                        return Err(ctx(format!("empty input {:?}", shapes[x])));
+                    }
+                    check_out(&ctx, &shapes[y], [oh, ow, c])?;
+                    let (ac, hp) = (op.options.align_corners, op.options.half_pixel_centers);
+                    if ac && hp {
+                        return Err(ctx("align_corners with half_pixel_centers".into()));
+                    }
+                    Step::Resize {
+                        x,
+                        y,
+                        in_w: w,
+                        c,
+                        rows: ResizeAxis::new(h, oh, ac, hp),
+                        cols: ResizeAxis::new(w, ow, ac, hp),
+                    }
+                }
+                OpCode::DepthToSpace => {
+                    let x = activation(input(0)?)?;
+                    let [h, w, c] = nhwc(x)?;
+                    let block = op.options.block_size;
+                    if block < 2 || !c.is_multiple_of(block * block) {
+                        return Err(ctx(format!("block size {block} for {c} channels")));
+                    }
+                    let c_out = c / (block * block);
+                    check_out(&ctx, &shapes[y], [h * block, w * block, c_out])?;
+                    Step::DepthToSpace {
+                        x,
+                        y,
+                        h,
+                        w,
+                        c_out,
+                        block,
+                    }
                 }
                 OpCode::MaxPool2d => {
                     let x = activation(input(0)?)?;
@@ -410,16 +514,19 @@ impl Network {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
         {
-            // SAFETY: the CPU supports AVX2 and FMA (checked just above).
+            // SAFETY: `run_avx2_fma` is compiled for AVX2 and FMA, and the run-time check just
+            // above found both on this CPU; it is otherwise safe code (bounds-checked kernels).
             unsafe { self.run_avx2_fma() };
             return;
         }
         self.run_steps::<Plain>();
     }
 
+    /// [`Network::run_steps`] with fused multiply-adds, compiled for AVX2 and FMA; call it only
+    /// where the CPU has both.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn run_avx2_fma(&mut self) {
+    fn run_avx2_fma(&mut self) {
         self.run_steps::<Fused>();
     }
 
@@ -444,11 +551,18 @@ impl Network {
                 };
             }
             match step {
-                Step::Conv { x, y, win, wts } => {
+                Step::Conv {
+                    x,
+                    y,
+                    win,
+                    wts,
+                    act,
+                } => {
                     with_out!(*y, |out| ops::conv2d::<M>(
                         get!(*x),
                         win,
                         wts,
+                        *act,
                         &mut self.scratch,
                         out
                     ))
@@ -467,7 +581,39 @@ impl Network {
                     with_out!(*y, |out| ops::prelu(get!(*x), alpha, out))
                 }
                 Step::Relu { x, y } => with_out!(*y, |out| ops::relu(get!(*x), out)),
-                Step::Add { a, b, y } => with_out!(*y, |out| ops::add(get!(*a), get!(*b), out)),
+                Step::Add { a, b, y, act } => {
+                    with_out!(*y, |out| ops::add(get!(*a), get!(*b), *act, out))
+                }
+                Step::Resize {
+                    x,
+                    y,
+                    in_w,
+                    c,
+                    rows,
+                    cols,
+                } => with_out!(*y, |out| ops::resize_bilinear(
+                    get!(*x),
+                    *in_w,
+                    *c,
+                    rows,
+                    cols,
+                    out
+                )),
+                Step::DepthToSpace {
+                    x,
+                    y,
+                    h,
+                    w,
+                    c_out,
+                    block,
+                } => with_out!(*y, |out| ops::depth_to_space(
+                    get!(*x),
+                    *h,
+                    *w,
+                    *c_out,
+                    *block,
+                    out
+                )),
                 Step::MaxPool { x, y, win, c } => {
                     with_out!(*y, |out| ops::max_pool2d(get!(*x), win, *c, out))
                 }
@@ -532,8 +678,10 @@ fn step_io(step: &Step) -> (Vec<usize>, usize) {
         | Step::Relu { x, y }
         | Step::MaxPool { x, y, .. }
         | Step::Pad { x, y, .. }
+        | Step::Resize { x, y, .. }
+        | Step::DepthToSpace { x, y, .. }
         | Step::Copy { x, y } => (vec![*x], *y),
-        Step::Add { a, b, y } => (vec![*a, *b], *y),
+        Step::Add { a, b, y, .. } => (vec![*a, *b], *y),
         Step::Concat { xs, y, .. } => (xs.clone(), *y),
     }
 }
@@ -598,6 +746,7 @@ mod tests {
             shape: shape.to_vec(),
             dtype,
             buffer,
+            sparsity: None,
         }
     }
 
@@ -667,10 +816,120 @@ mod tests {
         assert!(net.output(1).is_none() && net.output_named("sum").is_none());
     }
 
+    /// The full-range detector's operators: a sparse float16 kernel behind `DENSIFY` and
+    /// `DEQUANTIZE`, `CONV_2D` with fused ReLU, `DEPTH_TO_SPACE`, `RESIZE_BILINEAR` (half-pixel)
+    /// and `ADD` with fused ReLU; every value exact in f32.
+    fn full_range_ops_model() -> TfliteModel {
+        use crate::sparse::{DimFormat, Sparsity};
+        let f16: Vec<u8> = [0x3c00u16, 0xbc00, 0x4000] // 1, −1, 2
+            .iter()
+            .flat_map(|h| h.to_le_bytes())
+            .collect();
+        let mut sparse = tensor("k16s", &[4, 1, 1, 1], TensorType::Float16, 1);
+        // Kernel [1, 0, −1, 2] over [C_out, 1, 1, C_in = 1]; channel 1's zero is not stored.
+        sparse.sparsity = Some(Sparsity {
+            traversal_order: vec![0, 1, 2, 3],
+            block_map: Vec::new(),
+            dim_metadata: vec![
+                DimFormat::Dense { size: 4 },
+                DimFormat::Dense { size: 1 },
+                DimFormat::Dense { size: 1 },
+                DimFormat::SparseCsr {
+                    segments: vec![0, 1, 1, 2, 3],
+                    indices: vec![0, 0, 0],
+                },
+            ],
+        });
+        let mut ops = vec![
+            op(OpCode::Densify, &[1], 2),
+            op(OpCode::Dequantize, &[2], 3),
+            op(OpCode::Conv2d, &[0, 3, 4], 5),
+            op(OpCode::DepthToSpace, &[5], 6),
+            op(OpCode::ResizeBilinear, &[6, 7], 8),
+            op(OpCode::Conv2d, &[8, 9, 10], 11),
+            op(OpCode::Add, &[8, 11], 12),
+        ];
+        ops[2].options.activation = 1;
+        ops[3].options.block_size = 2;
+        ops[4].options.half_pixel_centers = true;
+        ops[6].options.activation = 1;
+        TfliteModel {
+            tensors: vec![
+                tensor("x", &[1, 1, 2, 1], TensorType::Float32, 0),
+                sparse,
+                tensor("k16", &[4, 1, 1, 1], TensorType::Float16, 0),
+                tensor("k", &[4, 1, 1, 1], TensorType::Float32, 0),
+                tensor("bias4", &[4], TensorType::Float32, 2),
+                tensor("conv", &[1, 1, 2, 4], TensorType::Float32, 0),
+                tensor("d2s", &[1, 2, 4, 1], TensorType::Float32, 0),
+                tensor("size", &[2], TensorType::Int32, 3),
+                tensor("resized", &[1, 4, 4, 1], TensorType::Float32, 0),
+                tensor("k2", &[1, 1, 1, 1], TensorType::Float32, 4),
+                tensor("bias1", &[1], TensorType::Float32, 5),
+                tensor("conv2", &[1, 4, 4, 1], TensorType::Float32, 0),
+                tensor("sum", &[1, 4, 4, 1], TensorType::Float32, 0),
+            ],
+            operators: ops,
+            inputs: vec![0],
+            outputs: vec![12],
+            buffers: vec![
+                Vec::new(),
+                f16,
+                f32_bytes(&[0.0; 4]),
+                [4i32, 4].iter().flat_map(|v| v.to_le_bytes()).collect(),
+                f32_bytes(&[-2.0]),
+                f32_bytes(&[1.0]),
+            ],
+        }
+    }
+
+    #[test]
+    fn runs_the_full_range_operators_by_hand() {
+        let mut net = Network::compile(&full_range_ops_model(), "ops").unwrap();
+        net.input_mut().copy_from_slice(&[1.0, -2.0]);
+        net.run();
+        // conv + ReLU: pixel 0 → [1, 0, 0, 2], pixel 1 → [0, 0, 2, 0]; depth-to-space (DCR):
+        // rows r0 = [1, 0, 0, 0], r1 = [0, 2, 2, 0]; resize rows 2 → 4 (half-pixel): r0,
+        // r0 + ¼(r1 − r0), r0 + ¾(r1 − r0), r1 (columns 4 → 4 unchanged); then
+        // ReLU(r + (1 − 2r)) = max(1 − r, 0).
+        let expected = [
+            0.0, 1.0, 1.0, 1.0, //
+            0.25, 0.5, 0.5, 1.0, //
+            0.75, 0.0, 0.0, 1.0, //
+            1.0, 0.0, 0.0, 1.0,
+        ];
+        assert_eq!(net.output(0), Some(("sum", &expected[..])));
+
+        // A sparse kernel whose indices leave the tensor is an error naming the file.
+        let mut m = full_range_ops_model();
+        if let Some(s) = m.tensors[1].sparsity.as_mut() {
+            s.dim_metadata[3] = crate::sparse::DimFormat::SparseCsr {
+                segments: vec![0, 1, 1, 2, 3],
+                indices: vec![0, 1, 0],
+            };
+        }
+        let e = Network::compile(&m, "sparse.tflite")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("sparse.tflite") && e.contains("k16s"), "{e}");
+        // So is one that places more values than stored, and a size that is not the output's.
+        let mut m = full_range_ops_model();
+        m.buffers[1].truncate(4);
+        assert!(Network::compile(&m, "short").is_err());
+        let mut m = full_range_ops_model();
+        m.buffers[3] = [4i32, 5].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let e = Network::compile(&m, "size").unwrap_err().to_string();
+        assert!(e.contains("ResizeBilinear"), "{e}");
+        // Fused activations elsewhere (here on DEPTH_TO_SPACE) stay unsupported.
+        let mut m = full_range_ops_model();
+        m.operators[3].options.activation = 1;
+        assert!(Network::compile(&m, "d2s").is_err());
+    }
+
     #[test]
     fn rejects_what_the_kernels_do_not_implement() {
         let mut m = small_model();
-        m.operators[1].options.activation = 1;
+        m.operators[1].options.activation = 3; // RELU6
         let e = Network::compile(&m, "fused.tflite")
             .unwrap_err()
             .to_string();

@@ -11,6 +11,9 @@
 //! strings are `u32` offsets relative to where they are stored; a vector is a `u32` length then the
 //! elements.
 
+use std::cell::Cell;
+
+use crate::sparse::{DimFormat, Sparsity};
 use crate::NnError;
 
 /// Element type of a tensor (`TensorType` in the schema).
@@ -32,6 +35,9 @@ pub struct Tensor {
     pub dtype: TensorType,
     /// Index into [`TfliteModel::buffers`]; constant tensors have a non-empty buffer.
     pub buffer: usize,
+    /// How a sparse constant is stored (its buffer then holds only the non-zeros); `None` for
+    /// dense tensors.
+    pub sparsity: Option<Sparsity>,
 }
 
 /// The built-in operators the engine implements (`BuiltinOperator` codes in the schema).
@@ -40,11 +46,14 @@ pub enum OpCode {
     Add,
     Concatenation,
     Conv2d,
+    Densify,
+    DepthToSpace,
     DepthwiseConv2d,
     Dequantize,
     MaxPool2d,
     Relu,
     Reshape,
+    ResizeBilinear,
     Pad,
     Prelu,
 }
@@ -56,12 +65,15 @@ impl OpCode {
             2 => OpCode::Concatenation,
             3 => OpCode::Conv2d,
             4 => OpCode::DepthwiseConv2d,
+            5 => OpCode::DepthToSpace,
             6 => OpCode::Dequantize,
             17 => OpCode::MaxPool2d,
             19 => OpCode::Relu,
             22 => OpCode::Reshape,
+            23 => OpCode::ResizeBilinear,
             34 => OpCode::Pad,
             54 => OpCode::Prelu,
+            124 => OpCode::Densify,
             _ => return None,
         })
     }
@@ -82,9 +94,16 @@ pub struct OpOptions {
     pub filter: [usize; 2],
     pub depth_multiplier: usize,
     pub dilation: [usize; 2],
-    /// `fused_activation_function`: 0 = none (the only value the engine accepts).
+    /// `fused_activation_function`: 0 = none, 1 = RELU (accepted on `CONV_2D` and `ADD`);
+    /// the engine rejects the others.
     pub activation: i8,
     pub axis: i32,
+    /// `DEPTH_TO_SPACE` block size.
+    pub block_size: usize,
+    /// `RESIZE_BILINEAR`: `align_corners`.
+    pub align_corners: bool,
+    /// `RESIZE_BILINEAR`: `half_pixel_centers`.
+    pub half_pixel_centers: bool,
 }
 
 impl Default for OpOptions {
@@ -97,6 +116,9 @@ impl Default for OpOptions {
             dilation: [1, 1],
             activation: 0,
             axis: 0,
+            block_size: 1,
+            align_corners: false,
+            half_pixel_centers: false,
         }
     }
 }
@@ -125,6 +147,8 @@ pub struct TfliteModel {
 struct Fb<'a> {
     buf: &'a [u8],
     name: &'a str,
+    /// Elements of the vectors read so far ([`Fb::vector`]), at most `buf.len()`.
+    elements: Cell<usize>,
 }
 
 impl<'a> Fb<'a> {
@@ -193,17 +217,52 @@ impl<'a> Fb<'a> {
     }
 
     /// `(start, len)` of a vector field.
+    ///
+    /// In a well-formed file vectors do not overlap and every element takes at least a byte, so
+    /// all the vectors read add up to at most as many elements as the file has bytes. A file
+    /// whose references point at one vector many times breaks that bound, and would make the
+    /// reader copy the same data over and over (a 300 kB file, 3 GB of buffers): it is an error
+    /// here. A vector longer than the rest of the file fails its bounds check where it is read.
     fn vector(&self, table: usize, index: usize) -> Result<(usize, usize), NnError> {
-        match self.table_field(table, index)? {
-            Some(v) => Ok((v + 4, self.u32(v)? as usize)),
-            None => Ok((0, 0)),
+        let Some(v) = self.table_field(table, index)? else {
+            return Ok((0, 0));
+        };
+        let (start, len) = (v + 4, self.u32(v)? as usize);
+        if len <= self.buf.len().saturating_sub(start) {
+            let elements = self.elements.get() + len;
+            if elements > self.buf.len() {
+                return Err(self.err(format!(
+                    "its vectors add up to more elements than the file has bytes ({}): \
+                     references point at the same data more than once",
+                    self.buf.len()
+                )));
+            }
+            self.elements.set(elements);
         }
+        Ok((start, len))
     }
 
     fn i32_vector(&self, table: usize, index: usize) -> Result<Vec<i32>, NnError> {
         let (start, len) = self.vector(table, index)?;
         self.bytes(start, len.saturating_mul(4))?;
         (0..len).map(|i| self.i32(start + 4 * i)).collect()
+    }
+
+    /// A vector of unsigned integers of `width` bytes (1, 2 or 4), widened.
+    fn uint_vector(&self, table: usize, index: usize, width: usize) -> Result<Vec<u32>, NnError> {
+        let (start, len) = self.vector(table, index)?;
+        let b = self.bytes(start, len.saturating_mul(width))?;
+        Ok(match width {
+            1 => b.iter().map(|&v| v as u32).collect(),
+            2 => b
+                .chunks_exact(2)
+                .map(|c| u16::from_le_bytes([c[0], c[1]]) as u32)
+                .collect(),
+            _ => b
+                .chunks_exact(4)
+                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect(),
+        })
     }
 
     fn tables(&self, table: usize, index: usize) -> Result<Vec<usize>, NnError> {
@@ -239,7 +298,11 @@ fn usize_of(fb: &Fb, v: i32, what: &str) -> Result<usize, NnError> {
 impl TfliteModel {
     /// Parses a `.tflite` flatbuffer; `name` is used in error messages (the file name).
     pub fn parse(bytes: &[u8], name: &str) -> Result<TfliteModel, NnError> {
-        let fb = Fb { buf: bytes, name };
+        let fb = Fb {
+            buf: bytes,
+            name,
+            elements: Cell::new(0),
+        };
         if bytes.len() < 8 || &bytes[4..8] != b"TFL3" {
             return Err(
                 fb.err("missing the TFL3 file identifier (not a TFLite model, or truncated)")
@@ -283,11 +346,17 @@ impl TfliteModel {
                     buffers.len()
                 )));
             }
+            // Tensor field 6: `sparsity`.
+            let sparsity = match fb.table_field(t, 6)? {
+                Some(s) => Some(read_sparsity(&fb, s)?),
+                None => None,
+            };
             tensors.push(Tensor {
                 name: fb.string(t, 3)?,
                 shape,
                 dtype,
                 buffer,
+                sparsity,
             });
         }
         let check_tensor = |i: i32| -> Result<usize, NnError> {
@@ -414,9 +483,71 @@ fn read_options(fb: &Fb, code: OpCode, o: usize) -> Result<OpOptions, NnError> {
             opt.axis = fb.scalar_i32(o, 0, 0)?;
             opt.activation = fb.scalar_i8(o, 1, 0)?;
         }
+        OpCode::DepthToSpace => {
+            opt.block_size = positive(fb, fb.scalar_i32(o, 0, 0)?, "block_size")?;
+        }
+        OpCode::ResizeBilinear => {
+            // Fields 0 and 1 (new_height, new_width) are deprecated: the size is an input.
+            opt.align_corners = fb.scalar_i8(o, 2, 0)? != 0;
+            opt.half_pixel_centers = fb.scalar_i8(o, 3, 0)? != 0;
+        }
         _ => {}
     }
     Ok(opt)
+}
+
+/// `SparsityParameters`: traversal_order 0, block_map 1, dim_metadata 2. Each
+/// `DimensionMetadata`: format 0, dense_size 1, array_segments (union type 2, value 3),
+/// array_indices (union type 4, value 5); the union members `Int32Vector`, `Uint16Vector`,
+/// `Uint8Vector` (types 1, 2, 3) hold their values in field 0. Only the layout is checked here;
+/// [`crate::sparse::densify`] checks that the indices fit the tensor.
+fn read_sparsity(fb: &Fb, s: usize) -> Result<Sparsity, NnError> {
+    let dims = |index: usize, what: &str| -> Result<Vec<usize>, NnError> {
+        fb.i32_vector(s, index)?
+            .into_iter()
+            .map(|d| usize_of(fb, d, what))
+            .collect()
+    };
+    let traversal_order = dims(0, "sparsity traversal order")?;
+    let block_map = dims(1, "sparsity block map")?;
+    let index_vector = |meta: usize, field: usize, what: &str| -> Result<Vec<usize>, NnError> {
+        let width = match fb.scalar_i8(meta, field, 0)? {
+            1 => 4,
+            2 => 2,
+            3 => 1,
+            t => {
+                return Err(fb.err(format!(
+                    "sparse dimension {what}: unknown index vector type {t}"
+                )))
+            }
+        };
+        let table = fb
+            .table_field(meta, field + 1)?
+            .ok_or_else(|| fb.err(format!("sparse dimension without {what}")))?;
+        Ok(fb
+            .uint_vector(table, 0, width)?
+            .into_iter()
+            .map(|v| v as usize)
+            .collect())
+    };
+    let mut dim_metadata = Vec::new();
+    for meta in fb.tables(s, 2)? {
+        dim_metadata.push(match fb.scalar_i8(meta, 0, 0)? {
+            0 => DimFormat::Dense {
+                size: usize_of(fb, fb.scalar_i32(meta, 1, 0)?, "dense_size")?,
+            },
+            1 => DimFormat::SparseCsr {
+                segments: index_vector(meta, 2, "array_segments")?,
+                indices: index_vector(meta, 4, "array_indices")?,
+            },
+            f => return Err(fb.err(format!("unknown sparse dimension format {f}"))),
+        });
+    }
+    Ok(Sparsity {
+        traversal_order,
+        block_map,
+        dim_metadata,
+    })
 }
 
 #[cfg(test)]
@@ -437,5 +568,282 @@ mod tests {
         for n in 0..junk.len() {
             let _ = TfliteModel::parse(&junk[..n], "cut");
         }
+    }
+
+    /// A flatbuffer value for [`build`]: scalars inline, the rest by reference.
+    enum V {
+        I8(i8),
+        I32(i32),
+        /// A table; `None` = field absent.
+        Table(Vec<Option<V>>),
+        /// A vector of tables.
+        Tables(Vec<V>),
+        /// A vector of scalars: the length it declares and its raw bytes.
+        Scalars(u32, Vec<u8>),
+        Str(&'static str),
+    }
+
+    fn i32s(v: &[i32]) -> V {
+        V::Scalars(
+            v.len() as u32,
+            v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+        )
+    }
+
+    /// Writes `v` (not a scalar) at the end of `buf`, children after their parent (references
+    /// point forward); returns its position.
+    fn put(buf: &mut Vec<u8>, v: &V) -> usize {
+        fn slot(buf: &mut Vec<u8>) -> usize {
+            buf.extend([0; 4]);
+            buf.len() - 4
+        }
+        fn patch(buf: &mut [u8], at: usize, target: usize) {
+            buf[at..at + 4].copy_from_slice(&((target - at) as u32).to_le_bytes());
+        }
+        let start = buf.len();
+        match v {
+            V::Table(fields) => {
+                let n = fields.len();
+                buf.extend((4 + 2 * n as u16).to_le_bytes());
+                buf.extend((4 + 4 * n as u16).to_le_bytes());
+                for (i, f) in fields.iter().enumerate() {
+                    let off = if f.is_some() { 4 + 4 * i as u16 } else { 0 };
+                    buf.extend(off.to_le_bytes());
+                }
+                let table = buf.len();
+                buf.extend(((table - start) as i32).to_le_bytes());
+                let mut children = Vec::new();
+                for f in fields {
+                    match f {
+                        None => buf.extend([0; 4]),
+                        Some(V::I8(x)) => buf.extend([*x as u8, 0, 0, 0]),
+                        Some(V::I32(x)) => buf.extend(x.to_le_bytes()),
+                        Some(child) => children.push((slot(buf), child)),
+                    }
+                }
+                for (at, child) in children {
+                    let c = put(buf, child);
+                    patch(buf, at, c);
+                }
+                table
+            }
+            V::Tables(items) => {
+                buf.extend((items.len() as u32).to_le_bytes());
+                let slots: Vec<usize> = items.iter().map(|_| slot(buf)).collect();
+                for (at, child) in slots.into_iter().zip(items) {
+                    let c = put(buf, child);
+                    patch(buf, at, c);
+                }
+                start
+            }
+            V::Scalars(n, bytes) => {
+                buf.extend(n.to_le_bytes());
+                buf.extend(bytes);
+                start
+            }
+            V::Str(s) => {
+                buf.extend((s.len() as u32).to_le_bytes());
+                buf.extend(s.as_bytes());
+                buf.push(0);
+                start
+            }
+            V::I8(_) | V::I32(_) => unreachable!("scalars are stored inline"),
+        }
+    }
+
+    /// A `.tflite` file whose root table is `model`.
+    fn build(model: &V) -> Vec<u8> {
+        let mut buf = vec![0, 0, 0, 0];
+        buf.extend(b"TFL3");
+        let root = put(&mut buf, model);
+        buf[0..4].copy_from_slice(&(root as u32).to_le_bytes());
+        buf
+    }
+
+    /// A model with one float16 tensor `w` of shape [2, 4] stored sparse (row dense, columns
+    /// CSR), rows [1, 0, 0, 2] and [0, 0, 3, 0]; `segments` and `indices` are the CSR level's
+    /// `(union type, vector)` (`None`: the union's table is absent); `format` is that level's
+    /// format (1 = CSR).
+    fn sparse_model(format: i8, segments: (i8, Option<V>), indices: (i8, Option<V>)) -> Vec<u8> {
+        let index_vector = |v: Option<V>| v.map(|v| V::Table(vec![Some(v)]));
+        let sparsity = V::Table(vec![
+            Some(i32s(&[0, 1])),
+            None,
+            Some(V::Tables(vec![
+                V::Table(vec![Some(V::I8(0)), Some(V::I32(2))]),
+                V::Table(vec![
+                    Some(V::I8(format)),
+                    None,
+                    Some(V::I8(segments.0)),
+                    index_vector(segments.1),
+                    Some(V::I8(indices.0)),
+                    index_vector(indices.1),
+                ]),
+            ])),
+        ]);
+        let tensor = V::Table(vec![
+            Some(i32s(&[2, 4])),
+            Some(V::I8(1)),
+            Some(V::I32(1)),
+            Some(V::Str("w")),
+            None,
+            None,
+            Some(sparsity),
+        ]);
+        let subgraph = V::Table(vec![
+            Some(V::Tables(vec![tensor])),
+            Some(i32s(&[])),
+            Some(i32s(&[])),
+            Some(V::Tables(Vec::new())),
+        ]);
+        let values: Vec<u8> = [0x3c00u16, 0x4000, 0x4200] // 1, 2, 3
+            .iter()
+            .flat_map(|h| h.to_le_bytes())
+            .collect();
+        build(&V::Table(vec![
+            Some(V::I32(3)),
+            Some(V::Tables(Vec::new())),
+            Some(V::Tables(vec![subgraph])),
+            None,
+            Some(V::Tables(vec![
+                V::Table(Vec::new()),
+                V::Table(vec![Some(V::Scalars(6, values))]),
+            ])),
+        ]))
+    }
+
+    #[test]
+    fn reads_a_sparse_tensor() {
+        let bytes = sparse_model(
+            1,
+            (3, Some(V::Scalars(3, vec![0, 2, 3]))),
+            (2, Some(i16s(&[0, 3, 2]))),
+        );
+        let m = TfliteModel::parse(&bytes, "sparse.tflite").unwrap();
+        let t = &m.tensors[0];
+        assert_eq!(
+            (t.name.as_str(), t.dtype, t.buffer),
+            ("w", TensorType::Float16, 1)
+        );
+        let s = t.sparsity.as_ref().unwrap();
+        assert_eq!(s.traversal_order, [0, 1]);
+        assert!(s.block_map.is_empty());
+        assert_eq!(
+            s.dim_metadata,
+            [
+                DimFormat::Dense { size: 2 },
+                DimFormat::SparseCsr {
+                    segments: vec![0, 2, 3],
+                    indices: vec![0, 3, 2],
+                },
+            ]
+        );
+        let values = crate::float16::f16_slice_to_f32(&m.buffers[1]);
+        let dense = crate::sparse::densify(s, &t.shape, &values).unwrap();
+        assert_eq!(dense, [1.0, 0.0, 0.0, 2.0, 0.0, 0.0, 3.0, 0.0]);
+    }
+
+    fn i16s(v: &[u16]) -> V {
+        V::Scalars(
+            v.len() as u32,
+            v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+        )
+    }
+
+    #[test]
+    fn rejects_a_malformed_sparsity_block_without_panicking() {
+        let ok = || (3, Some(V::Scalars(3, vec![0, 2, 3])));
+        let cases = [
+            // An index vector type outside the union.
+            (
+                sparse_model(1, ok(), (7, Some(V::Scalars(3, vec![0, 3, 2])))),
+                "index vector type 7",
+            ),
+            // Vectors that claim more elements than the file holds.
+            (
+                sparse_model(1, (3, Some(V::Scalars(1000, vec![0, 2, 3]))), ok()),
+                "past the end",
+            ),
+            (
+                sparse_model(1, ok(), (1, Some(V::Scalars(1 << 30, vec![0; 12])))),
+                "past the end",
+            ),
+            // A CSR level without its segments, and an unknown level format.
+            (sparse_model(1, (3, None), ok()), "without array_segments"),
+            (sparse_model(2, ok(), ok()), "format 2"),
+        ];
+        for (bytes, reason) in &cases {
+            let e = TfliteModel::parse(bytes, "bad_sparsity.tflite")
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("bad_sparsity.tflite") && e.contains(reason),
+                "{e}"
+            );
+        }
+        let good = sparse_model(1, ok(), ok());
+        assert!(TfliteModel::parse(&good, "good").is_ok());
+        // Any byte set to 0xff gives a model or an error, never a panic.
+        let mut bytes = good.clone();
+        for i in 8..bytes.len() {
+            let keep = bytes[i];
+            bytes[i] = 0xff;
+            let _ = TfliteModel::parse(&bytes, "flipped");
+            bytes[i] = keep;
+        }
+        // Every truncation fails cleanly.
+        for n in 0..good.len() {
+            assert!(TfliteModel::parse(&good[..n], "cut").is_err());
+        }
+    }
+
+    #[test]
+    fn a_vector_shared_by_many_references_is_rejected() {
+        // A model whose 1000 buffers all reference one Buffer table of 1000 bytes: read as is,
+        // a 5 kB file would become 1 MB of buffers (a 300 kB one, 3 GB).
+        let (n, len) = (1000usize, 1000usize);
+        let mut b = vec![0u8; 4];
+        b.extend(b"TFL3");
+        let patch = |b: &mut Vec<u8>, at: usize, target: usize| {
+            b[at..at + 4].copy_from_slice(&((target - at) as u32).to_le_bytes());
+        };
+        // Root: a vtable of five fields of which only `buffers` (4) is present, then the table.
+        let vtable = b.len();
+        for v in [14u16, 8, 0, 0, 0, 0, 4] {
+            b.extend(v.to_le_bytes());
+        }
+        let root = b.len();
+        b.extend(((root - vtable) as i32).to_le_bytes());
+        let buffers_ref = b.len();
+        b.extend([0; 4]);
+        let buffers = b.len();
+        patch(&mut b, buffers_ref, buffers);
+        b.extend((n as u32).to_le_bytes());
+        let slots: Vec<usize> = (0..n).map(|i| buffers + 4 + 4 * i).collect();
+        b.resize(buffers + 4 + 4 * n, 0);
+        // The one Buffer table: `data` (field 0) holds `len` bytes.
+        let buffer_vtable = b.len();
+        for v in [6u16, 8, 4] {
+            b.extend(v.to_le_bytes());
+        }
+        let buffer = b.len();
+        b.extend(((buffer - buffer_vtable) as i32).to_le_bytes());
+        let data_ref = b.len();
+        b.extend([0; 4]);
+        let data = b.len();
+        patch(&mut b, data_ref, data);
+        b.extend((len as u32).to_le_bytes());
+        b.resize(b.len() + len, 1);
+        for at in slots {
+            patch(&mut b, at, buffer);
+        }
+        b[0..4].copy_from_slice(&(root as u32).to_le_bytes());
+        let err = TfliteModel::parse(&b, "shared.tflite")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("shared.tflite") && err.contains("same data more than once"),
+            "{err}"
+        );
     }
 }

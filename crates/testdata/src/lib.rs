@@ -18,14 +18,17 @@
 //! `VISAGE_TEST_DATA` change; `scripts/test.sh` sets the last to what is present, so fetching
 //! the models or adding `../shared` turns the tests on.
 
+#![forbid(unsafe_code)]
+
 use std::path::{Path, PathBuf};
 
 /// The model files the tests use (`visage models fetch`).
-pub const MODEL_FILES: [&str; 4] = [
+pub const MODEL_FILES: [&str; 5] = [
     "face_detection_short_range.tflite",
     "face_landmark.tflite",
     "geometry_pipeline_metadata_landmarks.binarypb",
     "iris_landmark.tflite",
+    "face_detection_full_range_sparse.tflite",
 ];
 
 /// The workspace root (the folder with the top-level `Cargo.toml`).

@@ -1,5 +1,5 @@
 use super::depthwise_conv2d::valid_taps;
-use super::{Madd, Window};
+use super::{Activation, Madd, Window};
 
 /// Convolution weights re-laid out for the NHWC kernel: `w[(ky·k_w + kx)·C_in + ci][co]`
 /// (the reduction index outer, output channels contiguous), plus the bias `[C_out]`.
@@ -42,12 +42,30 @@ impl Conv2dWeights {
 ///
 /// `x` is `[in_h, in_w, C_in]`, `y` is `[out_h, out_w, C_out]`; `patch` is scratch of
 /// `4·k_h·k_w·C_in` values. A 1×1 stride-1 convolution is a GEMM and reads `x` in place.
+/// `act` is the fused activation, applied to the register block before it is stored.
 ///
 /// # Panics
 /// If a slice length does not match the window and weights.
 #[track_caller]
 #[inline(always)]
 pub fn conv2d<M: Madd>(
+    x: &[f32],
+    win: &Window,
+    wts: &Conv2dWeights,
+    act: Activation,
+    patch: &mut [f32],
+    y: &mut [f32],
+) {
+    // One copy of the loops per activation, so that the plain one is unchanged.
+    match act {
+        Activation::None => conv2d_act::<M, false>(x, win, wts, patch, y),
+        Activation::Relu => conv2d_act::<M, true>(x, win, wts, patch, y),
+    }
+}
+
+#[track_caller]
+#[inline(always)]
+fn conv2d_act<M: Madd, const RELU: bool>(
     x: &[f32],
     win: &Window,
     wts: &Conv2dWeights,
@@ -65,14 +83,14 @@ pub fn conv2d<M: Madd>(
         let mut rows = y.chunks_exact_mut(ROWS * co);
         let mut inputs = x.chunks_exact(ROWS * ci);
         for (yb, xb) in (&mut rows).zip(&mut inputs) {
-            gemm_rows::<M, ROWS>(xb, red, &wts.w, &wts.bias, yb);
+            gemm_rows::<M, ROWS, RELU>(xb, red, &wts.w, &wts.bias, yb);
         }
         for (yr, xr) in rows
             .into_remainder()
             .chunks_exact_mut(co)
             .zip(inputs.remainder().chunks_exact(ci))
         {
-            gemm_rows::<M, 1>(xr, red, &wts.w, &wts.bias, yr);
+            gemm_rows::<M, 1, RELU>(xr, red, &wts.w, &wts.bias, yr);
         }
         return;
     }
@@ -103,10 +121,10 @@ pub fn conv2d<M: Madd>(
         }
         let out = &mut y[first * co..(first + n) * co];
         if n == ROWS {
-            gemm_rows::<M, ROWS>(&patch[..ROWS * red], red, &wts.w, &wts.bias, out);
+            gemm_rows::<M, ROWS, RELU>(&patch[..ROWS * red], red, &wts.w, &wts.bias, out);
         } else {
             for r in 0..n {
-                gemm_rows::<M, 1>(
+                gemm_rows::<M, 1, RELU>(
                     &patch[r * red..(r + 1) * red],
                     red,
                     &wts.w,
@@ -122,33 +140,40 @@ pub fn conv2d<M: Madd>(
 /// Pixels per micro-kernel call.
 pub const ROWS: usize = 4;
 
-/// `y[p, :] = b + Σ_r a[p, r] · w[r, :]` for `R` rows: `a` is `R × red`, `w` is `red × C_out`,
-/// `y` is `R × C_out`. Output channels go in register blocks of 16, then 8, then 4, then one by one.
+/// `y[p, :] = b + Σ_r a[p, r] · w[r, :]` for `R` rows (then `max(·, 0)` if `RELU`): `a` is
+/// `R × red`, `w` is `red × C_out`, `y` is `R × C_out`. Output channels go in register blocks of
+/// 16, then 8, then 4, then one by one.
 #[inline(always)]
-fn gemm_rows<M: Madd, const R: usize>(a: &[f32], red: usize, w: &[f32], b: &[f32], y: &mut [f32]) {
+fn gemm_rows<M: Madd, const R: usize, const RELU: bool>(
+    a: &[f32],
+    red: usize,
+    w: &[f32],
+    b: &[f32],
+    y: &mut [f32],
+) {
     let co = b.len();
     let mut ob = 0;
     while ob + 16 <= co {
-        block::<M, R, 16>(a, red, w, b, co, ob, y);
+        block::<M, R, 16, RELU>(a, red, w, b, co, ob, y);
         ob += 16;
     }
     if ob + 8 <= co {
-        block::<M, R, 8>(a, red, w, b, co, ob, y);
+        block::<M, R, 8, RELU>(a, red, w, b, co, ob, y);
         ob += 8;
     }
     if ob + 4 <= co {
-        block::<M, R, 4>(a, red, w, b, co, ob, y);
+        block::<M, R, 4, RELU>(a, red, w, b, co, ob, y);
         ob += 4;
     }
     while ob < co {
-        block::<M, R, 1>(a, red, w, b, co, ob, y);
+        block::<M, R, 1, RELU>(a, red, w, b, co, ob, y);
         ob += 1;
     }
 }
 
 /// One `R × NB` register block of [`gemm_rows`], output channels `ob .. ob + NB`.
 #[inline(always)]
-fn block<M: Madd, const R: usize, const NB: usize>(
+fn block<M: Madd, const R: usize, const NB: usize, const RELU: bool>(
     a: &[f32],
     red: usize,
     w: &[f32],
@@ -170,6 +195,13 @@ fn block<M: Madd, const R: usize, const NB: usize>(
             let ap = a[p * red + r];
             for j in 0..NB {
                 row[j] = M::madd(ap, wr[j], row[j]);
+            }
+        }
+    }
+    if RELU {
+        for row in acc.iter_mut() {
+            for v in row.iter_mut() {
+                *v = v.max(0.0);
             }
         }
     }
@@ -250,9 +282,9 @@ mod tests {
             let wts = Conv2dWeights::from_ohwi(&ohwi, co, k, k, ci, b.clone());
             let mut y = vec![0.0; win.out_h * win.out_w * co];
             let mut patch = vec![0.0; ROWS * k * k * ci];
-            conv2d::<crate::ops::Plain>(&x, &win, &wts, &mut patch, &mut y);
+            conv2d::<crate::ops::Plain>(&x, &win, &wts, Activation::None, &mut patch, &mut y);
             let mut y2 = vec![0.0; y.len()];
-            conv2d::<crate::ops::Fused>(&x, &win, &wts, &mut patch, &mut y2);
+            conv2d::<crate::ops::Fused>(&x, &win, &wts, Activation::None, &mut patch, &mut y2);
             for (a, b) in y.iter().zip(&y2) {
                 assert!((a - b).abs() < 1e-5);
             }
@@ -263,6 +295,40 @@ mod tests {
                     "{a} vs {b} for {h}x{w}x{ci}->{co} k{k} s{s}"
                 );
             }
+            // The fused ReLU is max(·, 0) of the same values, bit for bit.
+            let mut y3 = vec![0.0; y.len()];
+            conv2d::<crate::ops::Plain>(&x, &win, &wts, Activation::Relu, &mut patch, &mut y3);
+            for (a, b) in y3.iter().zip(&y) {
+                assert_eq!(a.to_bits(), b.max(0.0).to_bits());
+            }
         }
+    }
+
+    #[test]
+    fn fused_relu_by_hand() {
+        // 1×1 conv of a 1×2×1 input [1, −2] with weights [1, −1] (2 outputs), bias [0.5, 0]:
+        // pixel 0 → (1.5, −1) → ReLU (1.5, 0); pixel 1 → (−1.5, 2) → (0, 2).
+        let win = Window::new(1, 2, [1, 1], [1, 1], Padding::Same);
+        let wts = Conv2dWeights::from_ohwi(&[1.0, -1.0], 2, 1, 1, 1, vec![0.5, 0.0]);
+        let mut y = [9.0; 4];
+        let mut patch = vec![0.0; ROWS];
+        conv2d::<crate::ops::Plain>(
+            &[1.0, -2.0],
+            &win,
+            &wts,
+            Activation::Relu,
+            &mut patch,
+            &mut y,
+        );
+        assert_eq!(y, [1.5, 0.0, 0.0, 2.0]);
+        conv2d::<crate::ops::Plain>(
+            &[1.0, -2.0],
+            &win,
+            &wts,
+            Activation::None,
+            &mut patch,
+            &mut y,
+        );
+        assert_eq!(y, [1.5, -1.0, -1.5, 2.0]);
     }
 }

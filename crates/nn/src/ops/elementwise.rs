@@ -1,3 +1,13 @@
+/// A fused activation (TFLite's `fused_activation_function`), of those the engine implements.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Activation {
+    /// None (`NONE`).
+    #[default]
+    None,
+    /// `max(x, 0)` (`RELU`).
+    Relu,
+}
+
 /// `y = max(x, 0)` (TFLite `RELU`).
 #[inline(always)]
 pub fn relu(x: &[f32], y: &mut [f32]) {
@@ -26,16 +36,26 @@ pub fn prelu(x: &[f32], alpha: &[f32], y: &mut [f32]) {
     }
 }
 
-/// Element-wise sum of two tensors of the same shape (TFLite `ADD`, no broadcasting).
+/// Element-wise sum of two tensors of the same shape (TFLite `ADD`, no broadcasting), with the
+/// fused activation `act` applied to each sum.
 ///
 /// # Panics
 /// If the lengths differ.
 #[track_caller]
 #[inline(always)]
-pub fn add(a: &[f32], b: &[f32], y: &mut [f32]) {
+pub fn add(a: &[f32], b: &[f32], act: Activation, y: &mut [f32]) {
     assert!(a.len() == b.len() && a.len() == y.len(), "add sizes");
-    for ((o, &u), &v) in y.iter_mut().zip(a).zip(b) {
-        *o = u + v;
+    match act {
+        Activation::None => {
+            for ((o, &u), &v) in y.iter_mut().zip(a).zip(b) {
+                *o = u + v;
+            }
+        }
+        Activation::Relu => {
+            for ((o, &u), &v) in y.iter_mut().zip(a).zip(b) {
+                *o = (u + v).max(0.0);
+            }
+        }
     }
 }
 
@@ -50,7 +70,21 @@ mod tests {
         assert_eq!(y, [-0.5, 2.0, -1.5, -1.0]);
         relu(&[-1.0, 2.0, 0.0, -0.0], &mut y);
         assert_eq!(y, [0.0, 2.0, 0.0, 0.0]);
-        add(&[1.0, 2.0, 3.0, 4.0], &[0.5; 4], &mut y);
+        add(&[1.0, 2.0, 3.0, 4.0], &[0.5; 4], Activation::None, &mut y);
         assert_eq!(y, [1.5, 2.5, 3.5, 4.5]);
+        add(
+            &[1.0, -2.0, 3.0, -0.25],
+            &[0.5; 4],
+            Activation::Relu,
+            &mut y,
+        );
+        assert_eq!(y, [1.5, 0.0, 3.5, 0.25]);
+        add(
+            &[1.0, -2.0, 3.0, -0.25],
+            &[0.5; 4],
+            Activation::None,
+            &mut y,
+        );
+        assert_eq!(y, [1.5, -1.5, 3.5, 0.25]);
     }
 }

@@ -5,17 +5,21 @@
 //! Kernels write into caller-owned outputs and never allocate.
 
 mod conv2d;
+mod depth_to_space;
 mod depthwise_conv2d;
 mod elementwise;
 mod madd;
 mod max_pool2d;
 mod pad;
+mod resize_bilinear;
 mod window;
 
 pub use conv2d::{conv2d, Conv2dWeights, ROWS as CONV_ROWS};
+pub use depth_to_space::depth_to_space;
 pub use depthwise_conv2d::depthwise_conv2d;
-pub use elementwise::{add, prelu, relu};
+pub use elementwise::{add, prelu, relu, Activation};
 pub use madd::{Fused, Madd, Plain};
 pub use max_pool2d::max_pool2d;
 pub use pad::pad4;
+pub use resize_bilinear::{resize_bilinear, ResizeAxis};
 pub use window::Window;
