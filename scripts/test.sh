@@ -19,3 +19,8 @@ cargo clippy -q --workspace --all-targets -- -D warnings
 python3 scripts/import_cycles.py
 cargo test --workspace
 RUSTDOCFLAGS="-D warnings" cargo doc -q --workspace --no-deps
+# The fuzz targets (fuzz/, a workspace of their own that `cargo +nightly fuzz` runs; see
+# fuzz/README.md) must keep compiling: formatted and type-checked on this toolchain, without
+# building libFuzzer's C++ runtime (--no-default-features), in fuzz/target.
+cargo fmt --manifest-path fuzz/Cargo.toml --check
+cargo check -q --manifest-path fuzz/Cargo.toml --no-default-features

@@ -1,6 +1,8 @@
+use std::io::Cursor;
 use std::path::Path;
 
-use image::{DynamicImage, ImageBuffer, Luma};
+use image::error::ImageFormatHint;
+use image::{DynamicImage, ImageBuffer, ImageError, ImageFormat, Luma};
 
 use crate::{CameraError, DepthKind, DepthMap};
 
@@ -8,22 +10,44 @@ use crate::{CameraError, DepthKind, DepthMap};
 ///
 /// Any other pixel format (8-bit, RGB, …) is an error that names the file and the format found.
 pub fn read_depth_png(path: &Path, scale: f64, kind: DepthKind) -> Result<DepthMap, CameraError> {
+    let bytes = std::fs::read(path).map_err(|source| CameraError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    parse_depth_png(&bytes, path, scale, kind)
+}
+
+/// [`read_depth_png`] of a file's bytes already in memory; `path` is the file they came from,
+/// named in errors (its extension is the format's fallback when the content does not tell it).
+pub fn parse_depth_png(
+    bytes: &[u8],
+    path: &Path,
+    scale: f64,
+    kind: DepthKind,
+) -> Result<DepthMap, CameraError> {
     let bad = |reason: String| CameraError::DepthImage {
         path: path.to_owned(),
         reason,
     };
-    let reader = image::ImageReader::open(path).map_err(|source| CameraError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    let img = reader
+    let cannot_decode = |e: ImageError| bad(format!("cannot decode image: {e}"));
+    let mut reader = image::ImageReader::new(Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|source| CameraError::Io {
             path: path.to_owned(),
             source,
-        })?
-        .decode()
-        .map_err(|e| bad(format!("cannot decode image: {e}")))?;
+        })?;
+    // As `ImageReader::open` does: when the content does not tell the format, the extension does.
+    if reader.format().is_none() {
+        if let Some(ext) = path.extension().filter(|ext| !ext.is_empty()) {
+            let format = ImageFormat::from_extension(ext).ok_or_else(|| {
+                cannot_decode(ImageError::Unsupported(
+                    ImageFormatHint::PathExtension(ext.into()).into(),
+                ))
+            })?;
+            reader.set_format(format);
+        }
+    }
+    let img = reader.decode().map_err(cannot_decode)?;
     let DynamicImage::ImageLuma16(buf) = img else {
         return Err(bad(format!(
             "expected a 16-bit single-channel depth PNG, found {:?}",

@@ -120,12 +120,25 @@ impl RigidTransform {
     /// [`CameraError::TransformFile`], naming the file and the problem: unreadable, not the
     /// expected JSON, or not a rigid motion ([`RigidTransform::validate`]).
     pub fn load_json(path: &Path) -> Result<RigidTransform, CameraError> {
+        let text = std::fs::read_to_string(path).map_err(|e| CameraError::TransformFile {
+            path: path.to_owned(),
+            reason: e.to_string(),
+        })?;
+        Self::parse_json(&text, path)
+    }
+
+    /// [`RigidTransform::load_json`] of a file's text already in memory; `path` is the file it
+    /// came from, named in errors.
+    ///
+    /// # Errors
+    /// [`CameraError::TransformFile`], naming `path` and the problem: not the expected JSON, or
+    /// not a rigid motion ([`RigidTransform::validate`]).
+    pub fn parse_json(text: &str, path: &Path) -> Result<RigidTransform, CameraError> {
         let file_err = |reason: String| CameraError::TransformFile {
             path: path.to_owned(),
             reason,
         };
-        let text = std::fs::read_to_string(path).map_err(|e| file_err(e.to_string()))?;
-        let t: RigidTransform = serde_json::from_str(&text)
+        let t: RigidTransform = serde_json::from_str(text)
             .map_err(|e| file_err(format!("not a valid pose file: {e}")))?;
         t.validate().map_err(|e| file_err(e.to_string()))?;
         Ok(t)

@@ -12,11 +12,11 @@ mod ply;
 
 pub use error::MeshIoError;
 pub use obj::{
-    read_obj, read_obj_with, write_mtl, write_obj, write_obj_with, ObjMaterial, ObjMesh,
+    parse_obj, read_obj, read_obj_with, write_mtl, write_obj, write_obj_with, ObjMaterial, ObjMesh,
     ObjReadOptions,
 };
-pub use pc2::{read_pc2, Pc2Writer, PointCache};
-pub use ply::{read_ply, write_ply, write_ply_with, PlyFormat, MAX_POLYGON_CORNERS};
+pub use pc2::{parse_pc2, read_pc2, Pc2Writer, PointCache};
+pub use ply::{parse_ply, read_ply, write_ply, write_ply_with, PlyFormat, MAX_POLYGON_CORNERS};
 
 use std::path::Path;
 

@@ -88,11 +88,24 @@ pub fn read_obj(path: &Path) -> Result<TriMesh, MeshIoError> {
 /// # Errors
 /// As [`read_obj`], for the statements that `options` reads.
 pub fn read_obj_with(path: &Path, options: &ObjReadOptions) -> Result<ObjMesh, MeshIoError> {
-    let text = std::fs::read(path).map_err(|source| MeshIoError::Io {
+    let bytes = std::fs::read(path).map_err(|source| MeshIoError::Io {
         path: path.to_owned(),
         source,
     })?;
-    let text = String::from_utf8_lossy(&text);
+    parse_obj(&bytes, path, options)
+}
+
+/// [`read_obj_with`] of a file's bytes already in memory; `path` is the file they came from,
+/// named in errors.
+///
+/// # Errors
+/// As [`read_obj_with`], except that nothing is read from disk.
+pub fn parse_obj(
+    bytes: &[u8],
+    path: &Path,
+    options: &ObjReadOptions,
+) -> Result<ObjMesh, MeshIoError> {
+    let text = String::from_utf8_lossy(bytes);
     let syntax = |line: usize, reason: String| MeshIoError::Syntax {
         path: path.to_owned(),
         line,

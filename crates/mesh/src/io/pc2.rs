@@ -154,6 +154,15 @@ pub fn read_pc2(path: &Path) -> Result<PointCache, MeshIoError> {
         path: path.to_owned(),
         source,
     })?;
+    parse_pc2(&bytes, path)
+}
+
+/// [`read_pc2`] of a file's bytes already in memory; `path` is the file they came from, named in
+/// errors.
+///
+/// # Errors
+/// As [`read_pc2`], except that nothing is read from disk.
+pub fn parse_pc2(bytes: &[u8], path: &Path) -> Result<PointCache, MeshIoError> {
     let bad = |reason: String| MeshIoError::Syntax {
         path: path.to_owned(),
         line: 0,
@@ -173,7 +182,11 @@ pub fn read_pc2(path: &Path) -> Result<PointCache, MeshIoError> {
         )));
     };
     let body = &bytes[SAMPLES_OFFSET as usize + 4..];
-    if body.len() as u64 != points as u64 * samples as u64 * 12 {
+    // Both counts come from the file: up to 2^31 each, 12 bytes per point overflow a u64.
+    let expected = (points as u64)
+        .checked_mul(samples as u64)
+        .and_then(|n| n.checked_mul(12));
+    if expected != Some(body.len() as u64) {
         return Err(bad(format!(
             "{} bytes of points for {samples} samples of {points} points (truncated or not finished)",
             body.len()
@@ -214,5 +227,28 @@ mod tests {
         std::fs::write(&path, b"not a cache").unwrap();
         let e = read_pc2(&path).unwrap_err().to_string();
         assert!(e.contains("a.pc2") && e.contains("POINTCACHE2"), "{e}");
+    }
+
+    #[test]
+    fn counts_whose_size_overflows_are_a_size_mismatch() {
+        // 2 130 706 432 points × 1 056 964 650 samples × 12 bytes overflows a u64 (this header
+        // used to panic on the multiplication, and could wrap to a plausible size).
+        let mut bytes = MAGIC.to_vec();
+        for word in [
+            0x000b_ff01u32,
+            0x7f00_0000,
+            0x0000_fdc0,
+            0x8000_0000,
+            0x3f00_002a,
+        ] {
+            bytes.extend_from_slice(&word.to_le_bytes());
+        }
+        let e = parse_pc2(&bytes, Path::new("huge.pc2"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("huge.pc2") && e.contains("0 bytes of points for 1056964650 samples"),
+            "{e}"
+        );
     }
 }

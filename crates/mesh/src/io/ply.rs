@@ -335,6 +335,15 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, MeshIoError> {
         path: path.to_owned(),
         source,
     })?;
+    parse_ply(&data, path)
+}
+
+/// [`read_ply`] of a file's bytes already in memory; `path` is the file they came from, named in
+/// errors.
+///
+/// # Errors
+/// As [`read_ply`], except that nothing is read from disk.
+pub fn parse_ply(data: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
     let syntax = |line: usize, reason: String| MeshIoError::Syntax {
         path: path.to_owned(),
         line,
@@ -444,7 +453,7 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, MeshIoError> {
         encoding.ok_or_else(|| syntax(line_no, "the header has no format line".into()))?;
 
     let mut body = Body {
-        data: &data,
+        data,
         pos,
         encoding,
         line: line_no,
@@ -494,6 +503,11 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, MeshIoError> {
         let has_n = is_vertex && nrm_idx.iter().all(Option::is_some);
         let has_uv = is_vertex && uv_idx.iter().all(Option::is_some);
         let has_c = is_vertex && col_idx.iter().all(Option::is_some);
+        if el.properties.is_empty() && encoding != Encoding::Ascii {
+            // A binary item without properties takes no bytes: nothing to read, whatever the
+            // count (looping over a count of 10^17 would never end).
+            continue;
+        }
         for index in 0..el.count {
             let fail = |body: &Body, e: ValueError| match (e, encoding) {
                 (ValueError::Eof, _) => MeshIoError::Truncated {
@@ -717,6 +731,26 @@ mod tests {
         std::fs::write(&path, &bytes[..bytes.len() - 60]).unwrap();
         let err = read_ply(&path).unwrap_err().to_string();
         assert!(err.contains("vertex 2 of 4"), "{err}");
+    }
+
+    #[test]
+    fn a_binary_element_without_properties_is_skipped_whatever_its_count() {
+        // Its items take no bytes; this count used to spin the reader for ever.
+        let mut bytes = b"ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nelement padding 99999999999999999\nend_header\n".to_vec();
+        for c in [1.0f32, 2.0, 3.0] {
+            bytes.extend_from_slice(&c.to_le_bytes());
+        }
+        let m = parse_ply(&bytes, Path::new("empty_items.ply")).unwrap();
+        assert_eq!(m.vertices, [[1.0, 2.0, 3.0]]);
+        // In ASCII every item is a line, so the same header is a truncated file.
+        let text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nelement padding 99999999999999999\nend_header\n1 2 3\n";
+        let err = parse_ply(text.as_bytes(), Path::new("empty_items.ply"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("truncated") && err.contains("padding 0"),
+            "{err}"
+        );
     }
 
     #[test]
