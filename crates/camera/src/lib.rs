@@ -8,6 +8,8 @@
 //!   Kinect/RealSense/TUM recordings store) or its distance along the ray (the paper's `D`),
 //!   see [`DepthKind`].
 
+#![forbid(unsafe_code)]
+
 mod depth_kind;
 mod depth_map;
 mod depth_png;
@@ -18,8 +20,10 @@ mod rigid_transform;
 
 pub use depth_kind::DepthKind;
 pub use depth_map::DepthMap;
-pub use depth_png::{read_depth_png, write_depth_png};
+pub use depth_png::{parse_depth_png, read_depth_png, write_depth_png};
 pub use error::CameraError;
-pub use intrinsics::{Intrinsics, DEFAULT_FOV_DEG};
+pub use intrinsics::{
+    Intrinsics, DEFAULT_FOV_DEG, FOV_RANGE_DEG, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE,
+};
 pub use rigid_fit::{horn_rotation, quaternion_to_matrix};
 pub use rigid_transform::{RigidTransform, ROTATION_TOLERANCE};

@@ -14,6 +14,8 @@
 //! Everything is deterministic given the configuration and seed, except the `ms_per_frame`
 //! timing fields.
 
+#![forbid(unsafe_code)]
+
 mod benchmark;
 mod error;
 mod method;

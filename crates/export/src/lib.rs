@@ -7,6 +7,8 @@
 //! `visage run --glb --report --preview` calls [`export`] on the folder it has just written;
 //! `visage export OUT` does the same for any earlier run's folder.
 
+#![forbid(unsafe_code)]
+
 mod arkit_targets;
 mod capture;
 mod error;

@@ -11,6 +11,8 @@
 //! Units: Ω in reference pixels ([`domain`]), surfaces in metres, λ in reference pixels⁴,
 //! μ dimensionless. Vertex fields are faer `Mat<f64>` of shape #V × 3 (x, y, z columns).
 
+#![forbid(unsafe_code)]
+
 mod biharmonic;
 mod clip;
 mod cotan_laplacian;

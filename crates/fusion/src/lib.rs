@@ -9,6 +9,8 @@
 //!
 //! [`SurfaceFusion`] runs either on a tracked face video, frame by frame or over a whole clip.
 
+#![forbid(unsafe_code)]
+
 mod anchored_fuser;
 mod depth_sequence;
 mod error;

@@ -7,10 +7,16 @@
 //! with Lowe's ratio test and a mutual check; [`estimate_rigid_motion`] turns matched keypoints
 //! lifted to 3-D into a rigid motion by RANSAC.
 
+// Unsafe code is denied except in `gaussian_blur`, whose one block calls the AVX2 build of the
+// blur after the run-time CPU check (`SAFETY:` there).
+#![deny(unsafe_code)]
+#![deny(unsafe_op_in_unsafe_fn, clippy::undocumented_unsafe_blocks)]
+
 mod descriptor;
 mod draw;
 mod extrema;
 mod fast_math;
+#[allow(unsafe_code)]
 mod gaussian_blur;
 mod gray_image;
 mod keypoint;

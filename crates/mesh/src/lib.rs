@@ -10,6 +10,8 @@
 //! area in pixel coordinates (normals of the back-projected surface face the camera); boundary
 //! constraint edges are never flipped.
 
+#![forbid(unsafe_code)]
+
 pub mod color;
 mod depth_aware;
 mod edge_map;

@@ -16,6 +16,8 @@
 //! - **Triangles**: every polygon `(v0, …, vn)` becomes the fan `(v0, vi, vi+1)`; quads give
 //!   two triangles with the file's orientation.
 
+#![forbid(unsafe_code)]
+
 mod error;
 mod face_model;
 pub mod fit;

@@ -1,6 +1,8 @@
 //! Small hand-written SVG charts (no plotting dependency): the benchmark's and the run
 //! report's line, x–y and heat-map charts.
 
+#![forbid(unsafe_code)]
+
 use std::fmt::Write as _;
 
 /// One line of a chart: `values[i]` is plotted at x = `first_x + i`.

@@ -144,7 +144,8 @@ impl SetupPlanes {
         planes.clear();
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
+            // SAFETY: `of_bin_avx2` is compiled for AVX2, which the run-time check just above
+            // found on this CPU; it is otherwise safe, bounds-checked code.
             unsafe { Self::of_bin_avx2(planes, bin, chunks, triangles, channels) };
             return;
         }
@@ -262,7 +263,8 @@ impl SetupPlanes {
         let second = [albedo(0), albedo(1), albedo(2), zero];
         for (at, rows) in [(0, first), (4, second)] {
             let [c, dx, dy] = transpose_x4(rows);
-            // SAFETY: each store writes the four `f64` at `at..at + 4 ≤ LINES`.
+            // SAFETY: `p.c`, `p.dx` and `p.dy` are `[f64; LINES]` and `at` is 0 or 4, so each
+            // (unaligned) store writes the four `f64` `at..at + 4 ≤ LINES` of its own array.
             unsafe {
                 _mm256_storeu_pd(p.c[at..].as_mut_ptr(), c);
                 _mm256_storeu_pd(p.dx[at..].as_mut_ptr(), dx);
@@ -387,9 +389,20 @@ mod tests {
                 channels.fill(&mesh, normal, &albedo);
                 for st in &setups {
                     let scalar = SetupPlanes::new(st, &mesh.triangles, &channels);
-                    // SAFETY: the CPU supports AVX2 (checked above).
+                    // SAFETY: `new_avx2` is compiled for AVX2, which the run-time check above
+                    // found on this CPU.
                     let avx2 = unsafe { SetupPlanes::new_avx2(st, &mesh.triangles, &channels) };
                     assert_eq!(bits(&scalar), bits(&avx2));
+                }
+                // The same through `of_bin`, which runs its AVX2 build for a whole bin.
+                let chunks = vec![setups.iter().map(|&&st| st).collect::<Vec<_>>()];
+                let bin: Vec<u32> = (0..setups.len() as u32).collect();
+                let mut planes = Vec::new();
+                SetupPlanes::of_bin(&mut planes, &bin, &chunks, &mesh.triangles, &channels);
+                assert_eq!(planes.len(), setups.len());
+                for (st, planes) in setups.iter().zip(&planes) {
+                    let scalar = SetupPlanes::new(st, &mesh.triangles, &channels);
+                    assert_eq!(bits(&scalar), bits(planes));
                 }
             }
         }

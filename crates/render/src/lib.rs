@@ -55,6 +55,14 @@
 //! - [`Rasterizer`]: reusable state for repeated frames; [`Rasterizer::fragment`] gives exact
 //!   per-pixel depth and barycentrics.
 
+// Unsafe code is denied except in the modules marked below: calls into the AVX2 and AVX-512
+// builds after the run-time CPU check (`simd`, `interpolation`, `rasterize`), x86-64 intrinsics
+// (streaming stores in `stream`, prefetches in `prefetch`, the texel sum in `texture`, plane
+// stores in `interpolation`, masked tile loads and stores in `rasterize`) and one unchecked
+// float-to-int conversion (`texture`). Each block states the invariant it relies on (`SAFETY:`).
+#![deny(unsafe_code)]
+#![deny(unsafe_op_in_unsafe_fn, clippy::undocumented_unsafe_blocks)]
+
 mod albedo;
 pub mod camera;
 pub mod clip;
@@ -64,17 +72,23 @@ pub mod depth;
 pub mod edge;
 mod error;
 mod frame;
+#[allow(unsafe_code)]
 mod interpolation;
 pub mod mat4;
 pub mod normals;
 mod plane;
+#[allow(unsafe_code)]
 mod prefetch;
 pub mod projection;
 pub mod projective;
+#[allow(unsafe_code)]
 pub mod rasterize;
 pub mod shading;
+#[allow(unsafe_code)]
 mod simd;
+#[allow(unsafe_code)]
 mod stream;
+#[allow(unsafe_code)]
 pub mod texture;
 pub mod turntable;
 mod validate;

@@ -491,12 +491,14 @@ fn scan_tile(
     {
         use std::arch::is_x86_feature_detected as has;
         if has!("avx512f") && has!("avx512vl") {
-            // SAFETY: the CPU supports AVX-512 F and VL (checked just above).
+            // SAFETY: `scan_tile_avx512` is compiled for AVX-512 F and VL, which the run-time
+            // check just above found on this CPU; its own unsafe blocks state their bounds.
             unsafe { scan_tile_avx512(chunks, bin, row0, width, depth, index) };
             return;
         }
         if has!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
+            // SAFETY: `scan_tile_avx2` is compiled for AVX2, which the run-time check just
+            // above found on this CPU; its own unsafe blocks state their bounds.
             unsafe { scan_tile_avx2(chunks, bin, row0, width, depth, index) };
             return;
         }
@@ -728,7 +730,8 @@ fn scan_avx512(
         let y = _mm512_add_pd(_mm512_set1_pd((y0 + h as i32) as f64), lanes);
         for (e, rows) in [e0, e1, e2].into_iter().zip(&mut rows) {
             let rows = &mut rows[h..h + 8];
-            // SAFETY: `rows` holds eight `f64`.
+            // SAFETY: `rows` is a (bounds-checked) slice of eight `f64`, which the unaligned
+            // store writes.
             unsafe { _mm512_storeu_pd(rows.as_mut_ptr(), e.row_x8(y)) };
         }
     }
@@ -1185,7 +1188,8 @@ mod tests {
         {
             use std::arch::is_x86_feature_detected as has;
             if has!("avx2") {
-                // SAFETY: the CPU supports AVX2 (checked just above).
+                // SAFETY: the closure is made, and so called, only after the run-time check
+                // just above found AVX2, which `scan_tile_avx2` is compiled for.
                 builds.push(("AVX2", |c, b, r, w, d, i| unsafe {
                     scan_tile_avx2(c, b, r, w, d, i)
                 }));
@@ -1193,7 +1197,8 @@ mod tests {
                 eprintln!("AVX2 scan not checked: the CPU lacks AVX2");
             }
             if has!("avx512f") && has!("avx512vl") {
-                // SAFETY: the CPU supports AVX-512 F and VL (checked just above).
+                // SAFETY: the closure is made, and so called, only after the run-time check
+                // just above found AVX-512 F and VL, which `scan_tile_avx512` is compiled for.
                 builds.push(("AVX-512", |c, b, r, w, d, i| unsafe {
                     scan_tile_avx512(c, b, r, w, d, i)
                 }));

@@ -215,7 +215,9 @@ impl Texture {
                 };
                 // The plain conversion (no saturation or NaN handling) vectorises.
                 let floor = |v: f64| {
-                    // SAFETY: `v` is finite and within [-1, max(W, H) − 1] ⊂ i32.
+                    // SAFETY: `v` is finite (non-finite positions were replaced by 0 above)
+                    // and clamped between −1 and `W − 1` (or `H − 1`), both `i32` values, so
+                    // its truncation is an `i32` as `to_int_unchecked` requires.
                     let t = unsafe { v.to_int_unchecked::<i32>() };
                     t - (t as f64 > v) as i32
                 };
@@ -446,6 +448,51 @@ mod tests {
             }
         }
         assert_eq!(t.sample_rgb([f64::INFINITY, 0.5], Wrap::Repeat), [0.0; 3]);
+    }
+
+    /// The renderer's lane sampler (taps located for a block, prefetched, then blended; the
+    /// clamped floor is an unchecked conversion) against [`Texture::sample`], lane by lane: both
+    /// wraps, positions far outside the texture and non-finite ones, full and partial blocks.
+    #[test]
+    fn lane_sampling_agrees_with_sample() {
+        let texels = (0..15)
+            .map(|k| [(k % 5) as f32 / 5.0, (k / 5) as f32 / 3.0, 0.25, 1.0])
+            .collect();
+        let t = Texture::new(5, 3, texels).unwrap();
+        let special = [
+            f64::NAN,
+            f64::INFINITY,
+            -f64::INFINITY,
+            1e12,
+            -1e12,
+            0.0,
+            1.0,
+        ];
+        let mut uvs: Vec<[f64; 2]> = (0..2 * LANES + 7)
+            .map(|k| [-2.3 + 0.0371 * k as f64, 3.1 - 0.0297 * k as f64])
+            .collect();
+        uvs.extend(special.iter().flat_map(|&u| special.map(|v| [u, v])));
+        let mut taps = TapLanes::default();
+        for wrap in [Wrap::Clamp, Wrap::Repeat] {
+            for block in uvs.chunks(LANES) {
+                let m = block.len();
+                let mut xy = [[0.0; LANES]; 2];
+                for (l, &uv) in block.iter().enumerate() {
+                    [xy[0][l], xy[1][l]] = t.texel_coords(uv);
+                }
+                let mut out = [[f32::NAN; LANES]; 3];
+                t.sample_rgb_lanes(&xy, m, wrap, &mut taps, &mut out);
+                for (l, &uv) in block.iter().enumerate() {
+                    let want = t.sample(uv, wrap);
+                    let got = [out[0][l], out[1][l], out[2][l]];
+                    assert!(
+                        (0..3).all(|c| (got[c] - want[c]).abs() < 1e-6),
+                        "{wrap:?} {uv:?}: {got:?} vs {want:?}"
+                    );
+                }
+                assert!(out.iter().all(|c| c[m..].iter().all(|v| v.is_nan())));
+            }
+        }
     }
 
     #[test]

@@ -11,6 +11,8 @@
 //! These are the baselines a user could apply in one line; the pipeline's own temporal
 //! model is judged against them (`visage eval video`).
 
+#![forbid(unsafe_code)]
+
 mod constant_velocity;
 mod ema;
 mod figures;

@@ -16,6 +16,8 @@
 //! The other way, [`VideoWriter`] encodes RGB frames to H.264 through `ffmpeg` (the preview
 //! video), under a temporary name until it is finished.
 
+#![forbid(unsafe_code)]
+
 mod encoder;
 mod error;
 mod exif;
