@@ -10,6 +10,12 @@ pub enum CameraError {
         value: f64,
         reason: &'static str,
     },
+    /// A file's intrinsics are invalid (the cause says which value and why).
+    #[error("{}: {source}", path.display())]
+    InvalidIntrinsicsFile {
+        path: PathBuf,
+        source: Box<CameraError>,
+    },
     /// The intrinsics describe another image size than the one given.
     #[error("intrinsics are for {expected_width}×{expected_height} images but the frame is {width}×{height}")]
     SizeMismatch {

@@ -7,6 +7,16 @@ use crate::CameraError;
 /// Horizontal field of view assumed when no intrinsics are given, in degrees.
 pub const DEFAULT_FOV_DEG: f64 = 60.0;
 
+/// The largest image side, in pixels, intrinsics may describe (16K).
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
+/// The most pixels an image may have (a 16K × 9K frame; 570 MB as 8-bit RGB): checked before
+/// any buffer of that size is reserved.
+pub const MAX_IMAGE_PIXELS: u64 = 16_384 * 9_216;
+/// The narrowest and widest field of view accepted, in degrees: the wider of the horizontal
+/// and vertical fields must reach the first, and neither may exceed the second (a pinhole
+/// model does not describe fisheye lenses).
+pub const FOV_RANGE_DEG: (f64, f64) = (5.0, 170.0);
+
 /// Pinhole intrinsics `K = [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]` for `width × height` images.
 ///
 /// Focal lengths and principal point are in pixels; the centre of pixel `(i, j)` is at `(i, j)`.
@@ -66,14 +76,14 @@ impl Intrinsics {
         )
     }
 
-    /// Square pixels, principal point at the image centre, horizontal field of view `fov_deg`:
-    /// `fx = fy = (width / 2) / tan(fov / 2)`.
+    /// Square pixels, principal point at the image centre, horizontal field of view `fov_deg`
+    /// (within [`FOV_RANGE_DEG`]): `fx = fy = (width / 2) / tan(fov / 2)`.
     pub fn from_fov(width: u32, height: u32, fov_deg: f64) -> Result<Self, CameraError> {
-        if !(fov_deg.is_finite() && fov_deg > 0.0 && fov_deg < 180.0) {
+        if !(fov_deg.is_finite() && fov_deg >= FOV_RANGE_DEG.0 && fov_deg <= FOV_RANGE_DEG.1) {
             return Err(CameraError::InvalidIntrinsics {
                 field: "fov_deg",
                 value: fov_deg,
-                reason: "must lie strictly between 0 and 180 degrees",
+                reason: "must lie between 5 and 170 degrees",
             });
         }
         let f = 0.5 * width as f64 / (0.5 * fov_deg.to_radians()).tan();
@@ -93,11 +103,21 @@ impl Intrinsics {
             path: path.to_owned(),
             source,
         })?;
-        let k: Intrinsics = serde_json::from_str(&text).map_err(|source| CameraError::Json {
+        Self::parse_json(&text, path)
+    }
+
+    /// [`Intrinsics::load_json`] of a file's text already in memory; `path` is the file it came
+    /// from, named in errors.
+    pub fn parse_json(text: &str, path: &Path) -> Result<Self, CameraError> {
+        let k: Intrinsics = serde_json::from_str(text).map_err(|source| CameraError::Json {
             path: path.to_owned(),
             source,
         })?;
-        k.validate()?;
+        k.validate()
+            .map_err(|e| CameraError::InvalidIntrinsicsFile {
+                path: path.to_owned(),
+                source: Box::new(e),
+            })?;
         Ok(k)
     }
 
@@ -113,7 +133,10 @@ impl Intrinsics {
         })
     }
 
-    /// Checks every parameter: sizes > 0, focal lengths > 0, everything finite.
+    /// Checks every parameter: sizes > 0 and within [`MAX_IMAGE_SIDE`] and [`MAX_IMAGE_PIXELS`],
+    /// focal lengths > 0, everything finite, the principal point inside the image (pixel
+    /// centres at integers: `−0.5 ≤ cx ≤ width − 0.5`), the field of view within
+    /// [`FOV_RANGE_DEG`].
     pub fn validate(&self) -> Result<(), CameraError> {
         let positive = [
             ("width", self.width as f64),
@@ -130,7 +153,24 @@ impl Intrinsics {
                 });
             }
         }
-        for (field, value) in [("cx", self.cx), ("cy", self.cy)] {
+        for (field, value) in [("width", self.width), ("height", self.height)] {
+            if value > MAX_IMAGE_SIDE {
+                return Err(CameraError::InvalidIntrinsics {
+                    field,
+                    value: value as f64,
+                    reason: "is more than the 16384 pixels visage accepts",
+                });
+            }
+        }
+        let pixels = self.width as u64 * self.height as u64;
+        if pixels > MAX_IMAGE_PIXELS {
+            return Err(CameraError::InvalidIntrinsics {
+                field: "width × height",
+                value: pixels as f64,
+                reason: "is more than the 151 million pixels visage accepts",
+            });
+        }
+        for (field, value, side) in [("cx", self.cx, self.width), ("cy", self.cy, self.height)] {
             if !value.is_finite() {
                 return Err(CameraError::InvalidIntrinsics {
                     field,
@@ -138,8 +178,45 @@ impl Intrinsics {
                     reason: "must be finite",
                 });
             }
+            if !(-0.5..=side as f64 - 0.5).contains(&value) {
+                return Err(CameraError::InvalidIntrinsics {
+                    field,
+                    value,
+                    reason: "puts the principal point outside the image",
+                });
+            }
+        }
+        let [fov_x, fov_y] = self.fov_deg();
+        if fov_x.max(fov_y) < FOV_RANGE_DEG.0 {
+            return Err(CameraError::InvalidIntrinsics {
+                field: "fx",
+                value: self.fx,
+                reason: "gives a field of view narrower than 5 degrees",
+            });
+        }
+        for (field, value, fov) in [("fx", self.fx, fov_x), ("fy", self.fy, fov_y)] {
+            if fov > FOV_RANGE_DEG.1 {
+                return Err(CameraError::InvalidIntrinsics {
+                    field,
+                    value,
+                    reason: "gives a field of view wider than 170 degrees",
+                });
+            }
         }
         Ok(())
+    }
+
+    /// The horizontal and vertical fields of view in degrees, edge to edge of the image
+    /// through the principal point.
+    pub fn fov_deg(&self) -> [f64; 2] {
+        let span = |c: f64, side: u32, f: f64| {
+            let (left, right) = (c + 0.5, side as f64 - 0.5 - c);
+            ((left / f).atan() + (right / f).atan()).to_degrees()
+        };
+        [
+            span(self.cx, self.width, self.fx),
+            span(self.cy, self.height, self.fy),
+        ]
     }
 
     /// Errors unless these intrinsics are for `width × height` images.
@@ -250,9 +327,45 @@ mod tests {
         )
         .unwrap();
         let err = Intrinsics::load_json(&path).unwrap_err().to_string();
-        assert!(err.contains("fx"), "{err}");
+        assert!(err.contains("fx") && err.contains("cam.json"), "{err}");
         std::fs::write(&path, "{").unwrap();
         let err = Intrinsics::load_json(&path).unwrap_err().to_string();
         assert!(err.contains("cam.json"), "{err}");
+    }
+
+    #[test]
+    fn limits_are_checked_before_anything_is_allocated() {
+        let e = Intrinsics::new(100_000, 100_000, 5e4, 5e4, 5e4, 5e4).unwrap_err();
+        assert!(e.to_string().contains("16384"), "{e}");
+        let e = Intrinsics::new(16_384, 16_384, 1e4, 1e4, 8e3, 8e3).unwrap_err();
+        assert!(e.to_string().contains("million pixels"), "{e}");
+        assert!(Intrinsics::new(16_384, 9_216, 1e4, 1e4, 8e3, 4e3).is_ok());
+    }
+
+    #[test]
+    fn the_principal_point_lies_in_the_image() {
+        let e = Intrinsics::new(640, 480, 500.0, 500.0, 99_999.0, 239.5).unwrap_err();
+        assert!(e.to_string().contains("cx = 99999") && e.to_string().contains("outside"));
+        assert!(Intrinsics::new(640, 480, 500.0, 500.0, 319.5, -0.6).is_err());
+        // The image's edges (pixel centres at integers) are still inside.
+        assert!(Intrinsics::new(640, 480, 500.0, 500.0, -0.5, 479.5).is_ok());
+    }
+
+    #[test]
+    fn the_field_of_view_lies_between_5_and_170_degrees() {
+        for fov in [5.0, 60.0, 170.0] {
+            let k = Intrinsics::from_fov(1280, 720, fov).unwrap();
+            assert!((k.fov_deg()[0] - fov).abs() < 1e-9);
+        }
+        for fov in [4.9, 170.1, 0.0, 180.0, f64::NAN] {
+            assert!(Intrinsics::from_fov(1280, 720, fov).is_err(), "{fov}");
+        }
+        // fx = 1e6 px on a 640-px image: 0.04°.
+        let e = Intrinsics::new(640, 480, 1e6, 1e6, 319.5, 239.5).unwrap_err();
+        assert!(e.to_string().contains("narrower than 5"), "{e}");
+        let e = Intrinsics::new(640, 480, 20.0, 500.0, 319.5, 239.5).unwrap_err();
+        assert!(e.to_string().contains("wider than 170"), "{e}");
+        // A portrait frame: the vertical field is the wide one.
+        assert!(Intrinsics::new(100, 4000, 1e4, 1e4, 49.5, 1999.5).is_ok());
     }
 }

@@ -20,6 +20,9 @@ impl std::error::Error for Failure {}
 /// Exit code of errors that do not say otherwise: bad input or environment.
 pub const BAD_INPUT: u8 = 2;
 
+/// Exit code of an input in which no frame shows a face.
+pub const NO_FACE: u8 = 3;
+
 /// Exit code of a bug.
 pub const INTERNAL: u8 = 1;
 

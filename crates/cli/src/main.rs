@@ -5,7 +5,11 @@
 //!
 //! Exit codes: 0 success; 1 an internal error (a bug); 2 bad input or an unusable environment
 //! (missing or malformed files, invalid parameters, unwritable output), with a message that
-//! names the file and the problem. Usage errors from the argument parser also exit with 2.
+//! names the file and the problem; 3 no face in any frame of the input (`run`, `landmarks`);
+//! 130 interrupted (Ctrl-C, SIGTERM) after writing what was done. Usage errors from the
+//! argument parser also exit with 2. `docs/errors.md` lists what each bad input gives.
+
+#![forbid(unsafe_code)]
 
 mod commands;
 mod exit;
@@ -20,7 +24,8 @@ use clap::{Parser, Subcommand};
 ///
 /// `visage run VIDEO --out OUT` writes a fused face mesh per frame; `visage COMMAND --help`
 /// explains each command. Exit codes: 0 success, 1 internal error, 2 bad input or
-/// environment (the message names the file and the problem).
+/// environment (the message names the file and the problem), 3 no face in the whole input,
+/// 130 interrupted.
 #[derive(Parser)]
 #[command(name = "visage", version, max_term_width = 80)]
 struct Cli {

@@ -64,7 +64,7 @@ fn landmarks_json_on_a_portrait() {
 
 #[test]
 #[cfg_attr(not(model_files), ignore = "needs the model files (scripts/setup.sh)")]
-fn an_image_without_a_face_gives_no_faces_and_exit_0() {
+fn an_image_without_a_face_gives_no_faces_and_exit_3() {
     let models = models();
     let tmp = tempfile::tempdir().unwrap();
     let blank = tmp.path().join("blank.png");
@@ -80,8 +80,12 @@ fn an_image_without_a_face_gives_no_faces_and_exit_0() {
         "--models",
         s(&models),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(!o.stderr.is_empty(), "a warning is expected on stderr");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains("no face was found in any of the 1 frames"),
+        "{err}"
+    );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert_eq!(json["frames"][0]["faces"].as_array().map(Vec::len), Some(0));

@@ -465,3 +465,147 @@ fn ctrl_c_stops_after_a_frame_and_keeps_the_work() {
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
+
+/// SIGKILL leaves no half-written file under a final name (every file that looks complete
+/// parses; metrics.json says "running"); a re-run into the folder is refused, saying what it
+/// found, and `--overwrite` replaces the killed run's files but keeps the user's.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_killed_run_leaves_complete_files_and_a_rerun_must_choose() {
+    let (models, clip) = inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_visage"))
+        .args([
+            "run",
+            s(&clip),
+            "--out",
+            s(&out),
+            "--ply",
+            "--models",
+            s(&models),
+        ])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while !out.join("meshes/000005.ply").exists() {
+        assert!(
+            started.elapsed().as_secs() < 120,
+            "no mesh after two minutes"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(json(&out.join("metrics.json"))["status"], "running");
+    assert_eq!(json(&out.join("camera.json"))["width"], 480);
+    for entry in std::fs::read_dir(out.join("meshes")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|x| x == "ply") {
+            visage_mesh::io::read_ply(&path).unwrap_or_else(|e| panic!("{path:?}: {e}"));
+        }
+    }
+    if out.join("mesh.obj").exists() {
+        visage_mesh::io::read_obj(&out.join("mesh.obj")).unwrap();
+    }
+    assert!(!out.join("landmarks.json").exists() && out.join("landmarks.json.tmp").exists());
+    std::fs::write(out.join("notes.txt"), b"mine").unwrap();
+
+    let o = visage(&["run", s(&clip), "--out", s(&out), "--models", s(&models)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("not empty") && err.contains("killed") && err.contains("--overwrite"),
+        "{err}"
+    );
+
+    run_five_frames(&clip, &models, &out, &["--overwrite"]);
+    assert_eq!(ply_count(&out.join("meshes")), 5, "stale meshes were left");
+    assert_eq!(json(&out.join("metrics.json"))["status"], "complete");
+    assert_eq!(std::fs::read(out.join("notes.txt")).unwrap(), b"mine");
+    let leftovers: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().extension().is_some_and(|x| x == "tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+
+    let o = visage(&[
+        "run",
+        s(&clip),
+        "--out",
+        s(&out),
+        "--max-frames",
+        "2",
+        "--models",
+        s(&models),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("\"complete\" over 5 frames"), "{err}");
+}
+
+/// Two portraits side by side: `--faces largest` meshes one and warns about the other;
+/// `--faces all` gives each its own folder (left to right) and lists them in faces.json.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files)),
+    ignore = "needs ../shared and the model files (scripts/setup.sh)"
+)]
+fn every_face_gets_its_own_folder_with_faces_all() {
+    let models = visage_testdata::models_dir();
+    let portrait =
+        visage_testdata::require(visage_testdata::shared_dir().join("data/images/astronaut.png"));
+    let tmp = tempfile::tempdir().unwrap();
+    let one = image::open(portrait).unwrap().to_rgb8();
+    let small = image::imageops::resize(&one, 280, 280, image::imageops::FilterType::Triangle);
+    let mut two = image::RgbImage::from_pixel(640, 320, image::Rgb([100, 100, 100]));
+    image::imageops::replace(&mut two, &small, 10, 30);
+    // The right one a little larger: the largest is the right-hand face.
+    let larger = image::imageops::resize(&one, 320, 320, image::imageops::FilterType::Triangle);
+    image::imageops::replace(&mut two, &larger, 310, 0);
+    let input = tmp.path().join("two.png");
+    two.save(&input).unwrap();
+
+    let out = tmp.path().join("largest");
+    let o = visage(&["run", s(&input), "--out", s(&out), "--models", s(&models)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("2 faces were in view"), "{err}");
+    let m = json(&out.join("metrics.json"));
+    assert_eq!(m["summary"]["most_faces_seen"], 2);
+    let nose_x = |dir: &Path| {
+        json(&dir.join("landmarks.json"))["frames"][0]["faces"][0]["landmarks"][1][0]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(nose_x(&out) > 320.0, "the largest face is the right one");
+
+    let out = tmp.path().join("all");
+    let o = visage(&[
+        "run",
+        s(&input),
+        "--out",
+        s(&out),
+        "--faces",
+        "all",
+        "--quiet",
+        "--models",
+        s(&models),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let faces = json(&out.join("faces.json"));
+    let faces = faces["faces"].as_array().unwrap();
+    assert_eq!(faces.len(), 2);
+    for (i, face) in faces.iter().enumerate() {
+        assert_eq!(face["id"], i + 1);
+        assert_eq!(face["status"], "complete");
+        assert_eq!(face["frames_meshed"], 1);
+    }
+    let (left, right) = (nose_x(&out.join("face-1")), nose_x(&out.join("face-2")));
+    assert!(left < 300.0 && right > 320.0, "{left} {right}");
+}

@@ -6,14 +6,35 @@ use std::path::Path;
 use image::RgbImage;
 
 use crate::landmarker::PRESENCE_THRESHOLD;
+use crate::nms::{weighted_nms, NMS_IOU_THRESHOLD};
 use crate::{
-    Eyes, Face, FaceDetector, FaceError, FaceLandmarker, FrameLandmarks, IrisLandmarker, Roi,
+    Detection, Eyes, Face, FaceDetector, FaceError, FaceLandmarker, FrameLandmarks, IrisLandmarker,
+    Roi,
 };
+
+/// The tile side (pixels) the full-range detector also looks at when the whole frame shows
+/// no face: faces from about 40 px wide ([`FaceDetector::detect_tiled`]).
+pub const FULL_RANGE_TILE: u32 = 640;
+
+/// Which detectors look for faces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum DetectorUse {
+    /// The short-range detector, and the full-range one (tiled) when it finds nothing.
+    #[default]
+    FallBack,
+    /// Both, their faces merged: every face in view, near and far.
+    Both,
+}
 
 /// Detector + landmarker (+ iris landmarker, optional) for still images.
 #[derive(Clone, Debug)]
 pub struct FaceMesh {
+    /// The short-range detector (faces within about 2 m).
     pub detector: FaceDetector,
+    /// The full-range detector, when its model file is there.
+    pub full_range: Option<FaceDetector>,
+    /// Which detectors [`FaceMesh::process`] runs.
+    pub detectors: DetectorUse,
     pub landmarker: FaceLandmarker,
     /// The eye stage; `None` skips the eyes (every [`Face::eyes`] is then `None`).
     pub iris: Option<IrisLandmarker>,
@@ -25,6 +46,8 @@ impl FaceMesh {
     pub fn load(models: &Path) -> Result<Self, FaceError> {
         Ok(FaceMesh {
             detector: FaceDetector::load(models)?,
+            full_range: FaceDetector::load_full_range_if_present(models)?,
+            detectors: DetectorUse::default(),
             landmarker: FaceLandmarker::load(models)?,
             iris: IrisLandmarker::load_if_present(models)?,
         })
@@ -42,11 +65,28 @@ impl FaceMesh {
             .transpose()
     }
 
+    /// The detections of `image` by the detectors [`FaceMesh::detectors`] chooses, highest
+    /// score first.
+    pub fn detect(&mut self, image: &RgbImage) -> Result<Vec<Detection>, FaceError> {
+        let mut detections = self.detector.detect(image)?;
+        let Some(full) = self.full_range.as_mut() else {
+            return Ok(detections);
+        };
+        match self.detectors {
+            DetectorUse::FallBack if !detections.is_empty() => Ok(detections),
+            DetectorUse::FallBack => full.detect_tiled(image, FULL_RANGE_TILE),
+            DetectorUse::Both => {
+                detections.extend(full.detect_tiled(image, FULL_RANGE_TILE)?);
+                Ok(weighted_nms(detections, NMS_IOU_THRESHOLD))
+            }
+        }
+    }
+
     /// All faces of `image`, highest detection score first; faces whose landmark presence is
     /// below [`PRESENCE_THRESHOLD`] are dropped. No face → empty list.
     pub fn process(&mut self, image: &RgbImage) -> Result<Vec<Face>, FaceError> {
         let mut faces = Vec::new();
-        for det in self.detector.detect(image)? {
+        for det in self.detect(image)? {
             let roi = Roi::from_detection(&det);
             let landmarks = self.landmarker.landmarks(image, &roi)?;
             if landmarks.presence < PRESENCE_THRESHOLD {

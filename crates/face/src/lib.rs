@@ -1,11 +1,13 @@
-//! The face front end of visage (paper §3, ERRATA 7–8): MediaPipe's BlazeFace detector and
-//! FaceMesh landmark network run in pure Rust from the original Apache-2.0 `.tflite` files,
-//! video tracking, and the metric face geometry that turns 468 landmarks into a metric mesh and a
-//! dense depth map.
+//! The face front end of visage (paper §3, ERRATA 7–8): MediaPipe's face detectors (BlazeFace
+//! short range, and full range for small faces) and FaceMesh landmark network run in pure Rust
+//! from the original Apache-2.0 `.tflite` files, video tracking, and the metric face geometry
+//! that turns 468 landmarks into a metric mesh and a dense depth map.
 //!
 //! Layers: [`model_files`] (verified `.tflite` files) → the inference engine of `visage-nn`
 //! ([`Network`]) → networks ([`detector`], [`landmarker`], [`iris`]) → [`tracker`] →
 //! [`face_geometry`].
+
+#![forbid(unsafe_code)]
 
 mod error;
 pub mod model_files;
@@ -30,7 +32,7 @@ pub mod letterbox;
 pub mod nms;
 
 pub use detection::Detection;
-pub use detector::{DetectorOptions, FaceDetector, ResizeFilter};
+pub use detector::{DetectorModel, DetectorOptions, FaceDetector, ResizeFilter};
 pub mod crop;
 mod face;
 pub mod face_mesh;
@@ -39,10 +41,10 @@ pub mod roi;
 pub mod tracker;
 
 pub use face::{points_bbox, Face};
-pub use face_mesh::FaceMesh;
+pub use face_mesh::{DetectorUse, FaceMesh, FULL_RANGE_TILE};
 pub use landmarker::{FaceLandmarker, FrameLandmarks};
 pub use roi::Roi;
-pub use tracker::{FaceTracker, TrackStep};
+pub use tracker::{box_proximity, FaceTarget, FaceTracker, TrackStep};
 pub mod eye_crop;
 pub mod iris;
 pub mod iris_network;

@@ -10,7 +10,7 @@ pub enum VideoError {
         source: std::io::Error,
     },
     /// An image file could not be decoded.
-    #[error("{}: cannot decode image: {reason}", path.display())]
+    #[error("{}: cannot decode the image: {reason}", path.display())]
     Image { path: PathBuf, reason: String },
     /// `ffmpeg`/`ffprobe` are not installed.
     #[error("{}: decoding video needs the FFmpeg command-line tools ({tool} not found: {reason}); install them, e.g. `apt-get install ffmpeg`", path.display())]

@@ -21,7 +21,7 @@ pub fn read_image(path: &Path) -> Result<Frame, VideoError> {
     })?;
     let img = image::load_from_memory(&bytes).map_err(|e| VideoError::Image {
         path: path.to_owned(),
-        reason: e.to_string(),
+        reason: image_error_in_words(&e),
     })?;
     Ok(Frame {
         index: 0,
@@ -29,6 +29,35 @@ pub fn read_image(path: &Path) -> Result<Frame, VideoError> {
         timestamp_s: None,
         image: img.to_rgb8(),
     })
+}
+
+/// What went wrong with an image file, in words (the decoders' own texts quote their internal
+/// error names).
+fn image_error_in_words(e: &image::ImageError) -> String {
+    use image::error::ImageFormatHint;
+    use image::ImageError;
+    let format = |hint: &ImageFormatHint| match hint {
+        ImageFormatHint::Exact(f) => f
+            .extensions_str()
+            .first()
+            .map_or_else(|| "image".to_owned(), |x| x.to_uppercase()),
+        _ => "image".to_owned(),
+    };
+    match e {
+        ImageError::Decoding(d) => {
+            format!(
+                "the {} data is damaged or truncated",
+                format(&d.format_hint())
+            )
+        }
+        ImageError::Unsupported(_) => {
+            "not an image format visage reads (PNG or JPEG), or a variant of one it does not"
+                .to_owned()
+        }
+        ImageError::Limits(_) => "the image is larger than the decoder's memory limit".to_owned(),
+        ImageError::IoError(io) => format!("read error: {io}"),
+        other => other.to_string(),
+    }
 }
 
 /// A stream of frames from a video file, a folder of images (name order) or one image.

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 use visage_camera::{Intrinsics, DEFAULT_FOV_DEG};
+use visage_face::FaceTarget;
 use visage_fem::{ClipOptions, Weights};
 use visage_fusion::{
     DepthSequence, FusionParams, MeshKind, MeshingOptions, ANCHORED_WEIGHTS_FACE,
@@ -136,6 +137,7 @@ pub struct Builder {
     pub(crate) latency: usize,
     pub(crate) fairing_length_mm: Option<f64>,
     pub(crate) keypoint_motion: bool,
+    pub(crate) face_target: FaceTarget,
 }
 
 impl Default for Builder {
@@ -158,6 +160,7 @@ impl Default for Builder {
             latency: DEFAULT_LATENCY_FRAMES,
             fairing_length_mm: None,
             keypoint_motion: false,
+            face_target: FaceTarget::Largest,
         }
     }
 }
@@ -202,6 +205,13 @@ impl Builder {
     /// milliseconds a frame.
     pub fn keypoint_motion(mut self, on: bool) -> Self {
         self.keypoint_motion = on;
+        self
+    }
+
+    /// Which face to follow when several are in view: the largest (default), or the one at a
+    /// box (`FaceTarget::Near`, pixels), which the track then keeps to.
+    pub fn face_target(mut self, target: FaceTarget) -> Self {
+        self.face_target = target;
         self
     }
 
@@ -379,15 +389,16 @@ impl Builder {
     }
 }
 
-/// A horizontal field of view strictly between 0° and 180°.
+/// A horizontal field of view between 5° and 170° (`visage_camera::FOV_RANGE_DEG`).
 pub fn check_fov(fov: f64) -> Result<(), Error> {
-    if fov.is_finite() && fov > 0.0 && fov < 180.0 {
+    let (min, max) = visage_camera::FOV_RANGE_DEG;
+    if fov.is_finite() && (min..=max).contains(&fov) {
         Ok(())
     } else {
         Err(Error::InvalidOption {
             name: "--fov-deg",
             value: fov.to_string(),
-            reason: "must lie strictly between 0 and 180",
+            reason: "must lie between 5 and 170 degrees",
         })
     }
 }

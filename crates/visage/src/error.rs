@@ -58,6 +58,9 @@ pub enum Error {
     /// A mesh file could not be written.
     #[error("cannot write {}", path.display())]
     WriteMesh { path: PathBuf, source: MeshIoError },
+    /// No frame of the input showed a face (neither detector found one).
+    #[error("no face was found in any of the {frames} frames")]
+    NoFace { frames: usize },
     /// The run was asked to stop (Ctrl-C, SIGTERM); the frames before it are complete.
     #[error("interrupted")]
     Interrupted,

@@ -42,6 +42,8 @@
 //! - Frame indices are input indices (a video's frame number, a folder's file number).
 //! - The face mesh's vertex `i < 468` is FaceMesh landmark `i`.
 
+#![forbid(unsafe_code)]
+
 mod animation;
 mod atomic_write;
 mod config;
@@ -63,6 +65,7 @@ mod reconstructor;
 mod recorder;
 mod rest_pose;
 mod rigid_jitter;
+mod run_folder;
 mod shot_cut;
 mod sink;
 mod stages;
@@ -103,11 +106,16 @@ pub use quality::{FusedAndRaw, QualitySummary};
 pub use reconstructor::{error_chain, FrameResult, Identity, Reconstructor, RunOutcome};
 pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP};
 pub use rigid_jitter::rigid_residual_rms;
+pub use run_folder::{
+    clear_outputs, inspect as inspect_output_folder, FolderContents, FACE_FOLDER_PREFIX,
+    OUTPUT_FILES, OUTPUT_FOLDERS,
+};
 pub use shot_cut::{CUT_FACE_JUMP, CUT_PICTURE_CHANGE};
 pub use sink::{FrameSink, MeshFrame};
 pub use stages::Surfaces;
 
 pub use visage_camera::{DepthKind, Intrinsics, RigidTransform, DEFAULT_FOV_DEG};
+pub use visage_face::FaceTarget;
 pub use visage_fem::{ClipOptions, Weights};
 pub use visage_fusion::{DepthSequence, MeshKind, MeshingOptions, DEFAULT_MAX_DEPTH_M};
 pub use visage_mesh::io::{write_ply, PlyFormat};

@@ -146,6 +146,9 @@ pub struct FrameMetrics {
     /// Whether the face detector ran (video runs; the rest of the frames were tracked).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub detector_ran: Option<bool>,
+    /// When the detector ran: the faces it found (the tracked one among them).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub faces_seen: Option<usize>,
     /// The frame starts a new shot (a cut, or the face jumped): the tracker looked for the
     /// face afresh and the temporal terms restarted here.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
@@ -191,6 +194,7 @@ impl FrameMetrics {
             time_s: None,
             status,
             detector_ran: None,
+            faces_seen: None,
             cut: false,
             ms: StageTimes::default(),
             valid_fraction: 0.0,
@@ -282,6 +286,10 @@ pub struct RunSummary {
     pub cpu_use: Option<f64>,
     /// Frames on which the face detector ran (the rest were tracked).
     pub detector_runs: usize,
+    /// The most faces the detector found in one frame, and the first frame (input index) where
+    /// it found that many; one face was tracked.
+    pub most_faces_seen: usize,
+    pub most_faces_frame: Option<usize>,
     /// Frames (input indices) that start a new shot; the temporal terms restarted there.
     pub cuts: Vec<usize>,
     /// Peak resident set size (VmHWM), MiB.
@@ -383,6 +391,13 @@ impl RunSummary {
                 )
             })
             .collect();
+        let most_faces = frames
+            .iter()
+            .filter_map(|f| f.faces_seen.map(|n| (f.index, n)))
+            .fold(None, |best: Option<(usize, usize)>, (i, n)| match best {
+                Some(b) if b.1 >= n => Some(b),
+                _ => Some((i, n)),
+            });
         RunSummary {
             frames: frames.len(),
             solved: solved.len(),
@@ -405,6 +420,8 @@ impl RunSummary {
                 .iter()
                 .filter(|f| f.detector_ran == Some(true))
                 .count(),
+            most_faces_seen: most_faces.map_or(0, |f| f.1),
+            most_faces_frame: most_faces.map(|f| f.0),
             cuts: frames.iter().filter(|f| f.cut).map(|f| f.index).collect(),
             peak_rss_mib: timing.peak_rss_mib,
             stages,
@@ -467,6 +484,9 @@ pub enum RunStatus {
     Failed,
     /// Stopped on request (Ctrl-C, SIGTERM) after a frame; the frames before it are listed.
     Interrupted,
+    /// Written when a run starts (with the input, camera and parameters, no frames): a
+    /// `metrics.json` that still says so after the run is gone belongs to a killed run.
+    Running,
 }
 
 /// Everything `metrics.json` holds. `P` is the run's parameters.

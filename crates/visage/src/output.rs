@@ -185,6 +185,22 @@ impl OutputDir {
         write_json_atomically(&self.dir.join("camera.json"), k)
     }
 
+    /// Writes the `metrics.json` of a run that has started: `"status": "running"`, the input,
+    /// the camera and the parameters (the final one replaces it).
+    pub fn write_running(
+        &self,
+        input: &str,
+        intrinsics: &Intrinsics,
+        parameters: &impl serde::Serialize,
+    ) -> Result<(), Error> {
+        self.write_metrics(&serde_json::json!({
+            "status": crate::RunStatus::Running,
+            "input": input,
+            "intrinsics": intrinsics,
+            "parameters": parameters,
+        }))
+    }
+
     /// Writes `metrics.json`.
     pub fn write_metrics(&self, report: &impl serde::Serialize) -> Result<(), Error> {
         write_json_atomically(&self.dir.join("metrics.json"), report)

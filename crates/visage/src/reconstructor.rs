@@ -196,7 +196,8 @@ impl Reconstructor {
         let mut mesh = FaceMesh::load(&models)?;
         // The eyes run in the model stage (its own thread in `run`), not in the tracker.
         let iris = mesh.iris.take().map(|net| [net.clone(), net]);
-        let tracker = FaceTracker::new(mesh);
+        let mut tracker = FaceTracker::new(mesh);
+        tracker.target = builder.face_target;
         let model_name = builder.model.describe();
         let model = match builder.model {
             ModelSource::Embedded => Some(FaceModel::embedded()),

@@ -259,6 +259,7 @@ impl FaceStage {
         let mut metrics = FrameMetrics::new(frame.index, frame.source.clone(), FrameStatus::NoFace);
         metrics.time_s = time_s;
         metrics.detector_ran = Some(step.detector_ran);
+        metrics.faces_seen = step.detector_ran.then_some(step.faces_seen);
         metrics.ms.decode = decode_ms;
         metrics.ms.track = t.elapsed().as_secs_f64() * 1e3;
         let mut cut = picture_cut;

@@ -18,9 +18,14 @@ use visage_video::{is_image_path, FrameSource};
 #[derive(Args, Debug)]
 pub struct LandmarksArgs {
     /// Images, videos or folders of images. A single image reports every face; a video or a
-    /// folder is a sequence: one face is tracked (the detector runs only when it is lost).
+    /// folder is a sequence: the largest face is tracked (the detector runs only when it is
+    /// lost), or with `--faces all` every face of every frame is reported.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
+    /// In a sequence, report the largest face (tracked) or every face (both detectors, near
+    /// and far faces, run on every frame; on a single image, too).
+    #[arg(long, value_enum, default_value = "largest")]
+    faces: crate::commands::run::FacesArg,
     /// Write the JSON here instead of standard output.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -57,10 +62,17 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
     }
     let mut frames_json = Vec::new();
     let mut frame_counter = 0usize;
+    let mut faces_found = 0usize;
     let mut tracker = FaceTracker::new(mesh);
     for input in &args.inputs {
         let still = input.is_file() && is_image_path(input);
         tracker.reset();
+        // `--faces all`: both detectors, near and far faces merged.
+        tracker.mesh.detectors = if args.faces == crate::commands::run::FacesArg::All {
+            visage_face::DetectorUse::Both
+        } else {
+            visage_face::DetectorUse::FallBack
+        };
         let source = FrameSource::open(input)?;
         for frame in source {
             let frame = frame?;
@@ -73,7 +85,7 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
                 }
                 None => Intrinsics::from_fov(w, h, fov)?,
             };
-            let faces: Vec<Face> = if still {
+            let faces: Vec<Face> = if still || args.faces == crate::commands::run::FacesArg::All {
                 tracker.mesh.process(&frame.image)?
             } else {
                 tracker.track(&frame.image)?.face.into_iter().collect()
@@ -81,6 +93,7 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
             if faces.is_empty() {
                 eprintln!("warning: {}: no face found", frame.source);
             }
+            faces_found += faces.len();
             let mut records = Vec::new();
             let mut geometries = Vec::new();
             for face in &faces {
@@ -120,7 +133,18 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
         );
     }
     let doc = json!({ "frames": frames_json });
-    write_json(args.out.as_deref(), &doc)
+    write_json(args.out.as_deref(), &doc)?;
+    if faces_found == 0 {
+        return Err(crate::exit::Failure {
+            code: crate::exit::NO_FACE,
+            error: anyhow::anyhow!(
+                "no face was found in any of the {frame_counter} frames (the landmarks file \
+                 lists them, without faces)"
+            ),
+        }
+        .into());
+    }
+    Ok(())
 }
 
 fn write_json(out: Option<&Path>, doc: &serde_json::Value) -> anyhow::Result<()> {

@@ -13,9 +13,9 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use indicatif::ProgressBar;
 use visage::{
-    BlendshapeFrame, Camera, DepthKind, DepthSequence, DepthSource, FrameMetrics, FrameSink, Input,
-    Intrinsics, KeptFrames, LandmarksFrame, MeshFrame, MeshKind, ModelSource, OutputDir, PlyFormat,
-    Reconstructor, TemporalMode, DEFAULT_SUBDIVISION,
+    BlendshapeFrame, Camera, DepthKind, DepthSequence, DepthSource, FaceTarget, FrameMetrics,
+    FrameSink, Input, Intrinsics, KeptFrames, LandmarksFrame, MeshFrame, MeshKind, ModelSource,
+    OutputDir, PlyFormat, Reconstructor, TemporalMode, DEFAULT_SUBDIVISION,
 };
 
 use std::sync::atomic::Ordering;
@@ -170,17 +170,77 @@ pub struct RunArgs {
     /// Write ASCII PLY instead of binary.
     #[arg(long)]
     pub ascii: bool,
+    /// Replace a previous run in the output folder: its files are removed first (other files
+    /// stay). Without it, a folder that is not empty is refused.
+    #[arg(long)]
+    pub overwrite: bool,
+    /// Which faces to mesh: the largest in view (a warning says when there were others), or
+    /// every face of the first frame that shows one, each tracked on its own into OUT/face-N/
+    /// (N from left to right) with OUT/faces.json listing them.
+    #[arg(long, value_enum, default_value = "largest")]
+    pub faces: FacesArg,
     #[command(flatten)]
     pub exports: ExportArgs,
+}
+
+/// `--faces`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FacesArg {
+    /// The largest face in view.
+    Largest,
+    /// Every face of the first frame that shows one.
+    All,
+}
+
+/// Refuses an output folder that is not empty, or (with `--overwrite`) removes a previous
+/// run's files from it, saying what it found.
+pub fn claim_output_folder(out: &std::path::Path, overwrite: bool) -> anyhow::Result<()> {
+    let contents = visage::inspect_output_folder(out)?;
+    if contents.is_empty() {
+        return Ok(());
+    }
+    if !overwrite {
+        return Err(Failure {
+            code: crate::exit::BAD_INPUT,
+            error: anyhow::anyhow!(
+                "{}: the output folder is not empty; it holds {}. Pass --overwrite to replace \
+                 a previous run's files (other files stay), or choose another folder",
+                out.display(),
+                contents.describe()
+            ),
+        }
+        .into());
+    }
+    if contents.has_run() {
+        let removed = visage::clear_outputs(out)?;
+        eprintln!(
+            "--overwrite: removed {} entries of the previous run from {} (it held {})",
+            removed.len(),
+            out.display(),
+            contents.describe()
+        );
+    }
+    Ok(())
 }
 
 impl PipelineArgs {
     /// The input (frame selection applied) and a reconstructor set up for it.
     pub fn open(&self) -> anyhow::Result<(Input, Reconstructor)> {
+        self.open_for(FaceTarget::Largest)
+    }
+
+    /// The input, frame selection applied.
+    pub fn open_input(&self) -> anyhow::Result<Input> {
         let mut input = Input::open(&self.input)?.every(self.every)?;
         if let Some(m) = self.max_frames {
             input = input.max_frames(m)?;
         }
+        Ok(input)
+    }
+
+    /// [`PipelineArgs::open`] for a run that follows `target`.
+    pub fn open_for(&self, target: FaceTarget) -> anyhow::Result<(Input, Reconstructor)> {
+        let input = self.open_input()?;
         let camera = match (&self.intrinsics, self.fov_deg) {
             (Some(path), _) => {
                 let k = Intrinsics::load_json(path)?;
@@ -231,7 +291,8 @@ impl PipelineArgs {
             .landmark_smoothing(self.smoothing.0)
             .latency(self.latency)
             .fairing(self.fair)
-            .keypoint_motion(self.keypoints);
+            .keypoint_motion(self.keypoints)
+            .face_target(target);
         if let Some(lambda) = self.lambda {
             builder = builder.lambda(lambda);
         }
@@ -290,7 +351,98 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let p = &args.pipeline;
     std::fs::metadata(&p.input)
         .with_context(|| format!("{}: cannot read the input", p.input.display()))?;
-    let (mut input, reconstructor) = p.open()?;
+    claim_output_folder(&args.out, args.overwrite)?;
+    // Ctrl-C ends the input: the frames read so far go through and are written.
+    let stop = interrupt::install();
+    if args.faces == FacesArg::Largest {
+        return run_face(&args, &args.out, FaceTarget::Largest, &stop).map(|_| ());
+    }
+    let faces = first_faces(p)?;
+    if faces.is_empty() {
+        return Err(Failure {
+            code: crate::exit::NO_FACE,
+            error: anyhow::anyhow!("{}: no face was found in any frame", p.input.display()),
+        }
+        .into());
+    }
+    if !p.quiet {
+        eprintln!(
+            "{} face{} in frame {}: each is tracked into its own folder",
+            faces.len(),
+            if faces.len() == 1 { "" } else { "s" },
+            faces[0].0
+        );
+    }
+    let mut records = Vec::new();
+    let mut first_error = None;
+    for (id, (frame, bbox)) in (1..).zip(&faces) {
+        let folder = format!("{}{id}", visage::FACE_FOLDER_PREFIX);
+        let dir = args.out.join(&folder);
+        let result = run_face(&args, &dir, FaceTarget::Near(*bbox), &stop);
+        let (status, meshed) = match &result {
+            Ok(summary) => ("complete", summary.solved + summary.carried),
+            Err(_) => ("failed", 0),
+        };
+        records.push(serde_json::json!({
+            "id": id,
+            "folder": folder,
+            "first_frame": frame,
+            "bbox": bbox,
+            "status": status,
+            "frames_meshed": meshed,
+        }));
+        if let Err(e) = result {
+            let interrupted = e
+                .downcast_ref::<Failure>()
+                .is_some_and(|f| f.code == interrupt::INTERRUPTED);
+            first_error.get_or_insert(e);
+            if interrupted {
+                break;
+            }
+        }
+    }
+    visage::write_json_atomically(
+        &args.out.join("faces.json"),
+        &serde_json::json!({ "input": p.input.display().to_string(), "faces": records }),
+    )?;
+    first_error.map_or(Ok(()), Err)
+}
+
+/// The faces of the first frame that shows any, left to right: the frame's input index and
+/// each face's box (`[x, y, width, height]`, pixels).
+fn first_faces(p: &PipelineArgs) -> anyhow::Result<Vec<(usize, [f32; 4])>> {
+    let models = p
+        .models
+        .clone()
+        .unwrap_or_else(visage_face::model_files::models_dir);
+    let mut mesh = visage_face::FaceMesh::load(&models)?;
+    mesh.detectors = visage_face::DetectorUse::Both;
+    let input = p.open_input()?;
+    for frame in input {
+        let frame = frame?;
+        let mut boxes: Vec<[f32; 4]> = mesh
+            .process(&frame.image)
+            .with_context(|| format!("{}: face detection", frame.source))?
+            .iter()
+            .map(|f| f.bbox)
+            .collect();
+        if !boxes.is_empty() {
+            boxes.sort_by(|a, b| a[0].total_cmp(&b[0]));
+            return Ok(boxes.into_iter().map(|b| (frame.index, b)).collect());
+        }
+    }
+    Ok(Vec::new())
+}
+
+/// One tracked face's run into `dir`: its summary, or the error (exit code attached).
+fn run_face(
+    args: &RunArgs,
+    dir: &std::path::Path,
+    target: FaceTarget,
+    stop: &std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> anyhow::Result<visage::RunSummary> {
+    let p = &args.pipeline;
+    let (mut input, reconstructor) = p.open_for(target)?;
     // The frames the texture is fused from, kept as they are decoded (no second decode).
     let kept = KeptFrames::default();
     if args.exports.any() {
@@ -302,7 +454,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     } else {
         PlyFormat::BinaryLittleEndian
     };
-    let mut out = OutputDir::create(&args.out)?
+    let mut out = OutputDir::create(dir)?
         .with_ply(format, args.ply, args.save_raw)?
         .with_point_cache()
         .with_landmarks()?;
@@ -311,9 +463,12 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     }
     // The camera the meshes are in: `visage render MESH --intrinsics OUT/camera.json`.
     out.write_camera(reconstructor.intrinsics())?;
+    out.write_running(
+        &p.input.display().to_string(),
+        reconstructor.intrinsics(),
+        reconstructor.parameters(),
+    )?;
     let bar = p.progress(&input);
-    // Ctrl-C ends the input: the frames read so far go through and are written.
-    let stop = interrupt::install();
     let input = input.stop_on(stop.clone());
     let mut sink = Terminal {
         sink: out,
@@ -322,6 +477,19 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let mut outcome = reconstructor.run(input, &mut sink);
     if stop.load(Ordering::SeqCst) && outcome.error.is_none() {
         outcome.error = Some(visage::Error::Interrupted);
+    }
+    let s = &outcome.summary;
+    if let (FaceTarget::Largest, true, Some(frame)) =
+        (target, s.most_faces_seen > 1, s.most_faces_frame)
+    {
+        eprintln!(
+            "warning: {} faces were in view (first in frame {frame}); only the largest was \
+             meshed (--faces all meshes each)",
+            s.most_faces_seen
+        );
+    }
+    if outcome.error.is_none() && s.frames > 0 && s.solved + s.carried == 0 {
+        outcome.error = Some(visage::Error::NoFace { frames: s.frames });
     }
     bar.finish_and_clear();
     let mut out = sink.sink;
@@ -339,9 +507,20 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
                 "interrupted after {} frames: their meshes, landmarks.json and metrics.json \
                  (status \"interrupted\") are in {}; `visage export {}` makes the other files",
                 outcome.frames.len(),
-                args.out.display(),
-                args.out.display()
+                dir.display(),
+                dir.display()
             ),
+        }
+        .into());
+    }
+    if let Some(e @ visage::Error::NoFace { .. }) = outcome.error {
+        return Err(Failure {
+            code: crate::exit::NO_FACE,
+            error: anyhow::Error::new(e).context(format!(
+                "{}: nothing to mesh (metrics.json is in {})",
+                p.input.display(),
+                dir.display()
+            )),
         }
         .into());
     }
@@ -349,13 +528,13 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         return Err(anyhow::Error::new(e).context(format!(
             "stopped after {} frames (meshes so far and metrics.json are in {})",
             outcome.frames.len(),
-            args.out.display()
+            dir.display()
         )));
     }
     if args.exports.any() {
-        let summary = exports_into(&args.out, &args.exports, Some(&kept.take()))?;
+        let summary = exports_into(dir, &args.exports, Some(&kept.take()))?;
         if !p.quiet {
-            print_summary(&args.out, &summary);
+            print_summary(dir, &summary);
         }
     }
     if !p.quiet {
@@ -366,7 +545,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             s.frames,
             s.solved + s.carried,
             s.no_face,
-            args.out.display(),
+            dir.display(),
             s.fps,
             s.cpu_use.unwrap_or(0.0),
             s.peak_rss_mib.unwrap_or(0.0),
@@ -374,5 +553,5 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             s.quality.image_jitter_reduction.unwrap_or(0.0),
         );
     }
-    Ok(())
+    Ok(outcome.summary)
 }
