@@ -27,11 +27,12 @@ pub const FULL_RANGE_SCORE_THRESHOLD: f32 = 0.6;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub enum DetectorModel {
     /// BlazeFace short range: 128×128 input, 896 anchors; faces wider than about a tenth of
-    /// the frame (MediaPipe: within ~2 m of the camera).
+    /// the frame's longer side, ~140 px in a 1280×720 frame (MediaPipe: within ~2 m).
     #[default]
     ShortRange,
-    /// Full range: 192×192 input, 2304 anchors (a 48×48 grid); faces down to about 3 % of the
-    /// frame's longer side, e.g. 40 px in a 1280×720 frame (MediaPipe: within ~5 m).
+    /// Full range: 192×192 input, 2304 anchors (a 48×48 grid); faces down to about 5.5 % of
+    /// the frame's longer side, ~70 px in a 1280×720 frame (MediaPipe: within ~5 m), and about
+    /// `tile / 16` px with [`FaceDetector::detect_tiled`] (~40 px in 640-px tiles).
     FullRange,
 }
 

@@ -359,8 +359,8 @@ pub fn extract_from_tarball(tarball: &Path, dir: &Path) -> Result<Vec<PathBuf>, 
 
 /// Downloads [`WHEEL_FILE`] with `python3 -m pip download` (pinned version, platform and Python
 /// tag, no dependencies) into a temporary folder inside `dir` and extracts the iris network and
-/// the full-range detector from it (see [`extract_from_wheel`]). Needs Python 3 with pip and access to PyPI. Returns the paths
-/// written.
+/// the full-range detector from it (see [`extract_from_wheel`]). Needs Python 3 with pip and
+/// access to PyPI. Returns the paths written.
 pub fn fetch_with_pip(dir: &Path) -> Result<Vec<PathBuf>, FaceError> {
     let io = |path: &Path| {
         let path = path.to_owned();

@@ -111,6 +111,48 @@ fn err(name: &str, reason: String) -> NnError {
     }
 }
 
+/// Most values one tensor may have (2^26, 256 MiB of f32): a guard against corrupt shapes,
+/// checked before anything is allocated. MediaPipe's face networks have under a million.
+pub const MAX_TENSOR_VALUES: usize = 1 << 26;
+
+/// Most values a compiled network may hold, its weights and activations together (2^28,
+/// 1 GiB of f32): a corrupt model that reuses one large constant many times, or describes huge
+/// activations, is an error rather than an allocation that takes all memory.
+pub const MAX_NETWORK_VALUES: usize = 1 << 28;
+
+/// The values allocated so far while compiling, against [`MAX_NETWORK_VALUES`].
+struct Budget<'a> {
+    name: &'a str,
+    spent: std::cell::Cell<usize>,
+}
+
+impl Budget<'_> {
+    /// Counts `values` more, before they are allocated.
+    fn charge(&self, values: usize) -> Result<(), NnError> {
+        let spent = self.spent.get().saturating_add(values);
+        if spent > MAX_NETWORK_VALUES {
+            return Err(err(
+                self.name,
+                format!(
+                    "its weights and activations need more than {MAX_NETWORK_VALUES} values \
+                     (1 GiB), far more than a face network"
+                ),
+            ));
+        }
+        self.spent.set(spent);
+        Ok(())
+    }
+}
+
+/// A shape in words, e.g. `1×192×192×3` (`scalar` for rank 0).
+fn dims(shape: &[usize]) -> String {
+    if shape.is_empty() {
+        return "scalar".into();
+    }
+    let dims: Vec<String> = shape.iter().map(usize::to_string).collect();
+    dims.join("×")
+}
+
 impl Network {
     /// Compiles a parsed model. `name` is used in error messages.
     ///
@@ -118,6 +160,29 @@ impl Network {
     /// activations, dilation, depth multiplier ≠ 1, broadcasting adds, non-constant weights).
     pub fn compile(model: &TfliteModel, name: &str) -> Result<Network, NnError> {
         let n = model.tensors.len();
+        // Every shape within MAX_TENSOR_VALUES (zero dimensions counted as one), so that no
+        // product of dimensions below can overflow and no tensor is unreasonably large.
+        for t in &model.tensors {
+            let size = t
+                .shape
+                .iter()
+                .try_fold(1usize, |size, &d| size.checked_mul(d.max(1)));
+            if size.is_none_or(|size| size > MAX_TENSOR_VALUES) {
+                return Err(err(
+                    name,
+                    format!(
+                        "tensor {} of shape {} is too large: its dimensions multiply to more \
+                         than {MAX_TENSOR_VALUES}",
+                        t.name,
+                        dims(&t.shape)
+                    ),
+                ));
+            }
+        }
+        let budget = Budget {
+            name,
+            spent: std::cell::Cell::new(0),
+        };
         let shapes: Vec<Vec<usize>> = model.tensors.iter().map(|t| t.shape.clone()).collect();
         // Constant values: float32 buffers directly, float16 through DEQUANTIZE.
         let mut consts: Vec<Option<Vec<f32>>> = vec![None; n];
@@ -154,6 +219,7 @@ impl Network {
                     ),
                 ));
             }
+            budget.charge(data.len() / width)?;
             match t.dtype {
                 TensorType::Float32 => {
                     consts[i] = Some(
@@ -179,6 +245,7 @@ impl Network {
                         format!("sparse tensor {} is not floating-point", t.name),
                     )
                 })?;
+                budget.charge(dense_count)?;
                 let dense = densify(sparsity, &t.shape, &values)
                     .map_err(|e| err(name, format!("sparse tensor {}: {e}", t.name)))?;
                 consts[i] = Some(dense);
@@ -187,11 +254,20 @@ impl Network {
         let Some(&input) = model.inputs.first() else {
             return Err(err(name, "no graph input".into()));
         };
+        // Only the first input gets a buffer ([`Network::input_mut`]); another one, read by an
+        // operator or listed as an output, would have none.
+        if model.inputs.len() > 1 {
+            return Err(err(
+                name,
+                format!(
+                    "the graph has {} inputs; this engine runs graphs of one",
+                    model.inputs.len()
+                ),
+            ));
+        }
         let mut steps = Vec::new();
         let mut produced = vec![false; n];
-        for &i in &model.inputs {
-            produced[i] = true;
-        }
+        produced[input] = true;
         for (k, op) in model.operators.iter().enumerate() {
             let ctx = |reason: String| err(name, format!("operator {k} ({:?}): {reason}", op.code));
             // Fused activations: RELU on CONV_2D and ADD (their kernels apply it), none elsewhere.
@@ -212,12 +288,23 @@ impl Network {
                 return Err(ctx("no output".into()));
             };
             let constant = |t: usize| -> Result<&Vec<f32>, NnError> {
-                consts[t].as_ref().ok_or_else(|| {
+                let values = consts[t].as_ref().ok_or_else(|| {
                     ctx(format!(
                         "tensor {} must be a constant",
                         model.tensors[t].name
                     ))
-                })
+                })?;
+                // A DEQUANTIZE output takes its input's values, whatever its own shape says.
+                let len: usize = shapes[t].iter().product();
+                if values.len() != len {
+                    return Err(ctx(format!(
+                        "constant {} has {} values for its shape {}",
+                        model.tensors[t].name,
+                        values.len(),
+                        dims(&shapes[t])
+                    )));
+                }
+                Ok(values)
             };
             let activation = |t: usize| -> Result<usize, NnError> {
                 if produced[t] {
@@ -241,7 +328,9 @@ impl Network {
             let step = match op.code {
                 OpCode::Dequantize => {
                     let x = input(0)?;
-                    consts[y] = Some(constant(x)?.clone());
+                    let values = constant(x)?;
+                    budget.charge(values.len())?;
+                    consts[y] = Some(values.clone());
                     continue;
                 }
                 OpCode::Densify => {
@@ -253,7 +342,9 @@ impl Network {
                             model.tensors[x].name
                         )));
                     }
-                    consts[y] = Some(constant(x)?.clone());
+                    let values = constant(x)?;
+                    budget.charge(values.len())?;
+                    consts[y] = Some(values.clone());
                     continue;
                 }
                 OpCode::Conv2d => {
@@ -272,6 +363,7 @@ impl Network {
                     }
                     let win = Window::new(h, w, [kh, kw], op.options.stride, op.options.padding);
                     check_out(&ctx, &shapes[y], [win.out_h, win.out_w, co])?;
+                    budget.charge(kernel.len() + bias.len())?;
                     let wts = Conv2dWeights::from_ohwi(kernel, co, kh, kw, ci, bias.clone());
                     Step::Conv {
                         x,
@@ -301,6 +393,7 @@ impl Network {
                     }
                     let win = Window::new(h, w, [kh, kw], op.options.stride, op.options.padding);
                     check_out(&ctx, &shapes[y], [win.out_h, win.out_w, c])?;
+                    budget.charge(kernel.len() + bias.len())?;
                     Step::Depthwise {
                         x,
                         y,
@@ -312,7 +405,9 @@ impl Network {
                 }
                 OpCode::Prelu => {
                     let x = activation(input(0)?)?;
-                    let alpha = constant(input(1)?)?.clone();
+                    let alpha = constant(input(1)?)?;
+                    budget.charge(alpha.len())?;
+                    let alpha = alpha.clone();
                     let c = *shapes[x].last().unwrap_or(&0);
                     if alpha.len() != c || shapes[y] != shapes[x] {
                         return Err(ctx(format!(
@@ -357,6 +452,8 @@ impl Network {
                     if ac && hp {
                         return Err(ctx("align_corners with half_pixel_centers".into()));
                     }
+                    // Per output row and column: two indices and a weight, five f32s' worth.
+                    budget.charge(5 * (oh + ow))?;
                     Step::Resize {
                         x,
                         y,
@@ -469,7 +566,6 @@ impl Network {
         }
         let len_of: Vec<usize> = shapes.iter().map(|s| s.iter().product()).collect();
         let (slot_of, slot_len) = allocate_slots(&steps, &len_of, input, &model.outputs);
-        let values = slot_len.iter().map(|&l| vec![0.0; l]).collect();
         let scratch_len = steps
             .iter()
             .map(|s| match s {
@@ -478,6 +574,11 @@ impl Network {
             })
             .max()
             .unwrap_or(0);
+        let buffers = slot_len
+            .iter()
+            .fold(scratch_len, |a, &l| a.saturating_add(l));
+        budget.charge(buffers)?;
+        let values = slot_len.iter().map(|&l| vec![0.0; l]).collect();
         Ok(Network {
             steps,
             values,
@@ -952,5 +1053,84 @@ mod tests {
         m.operators.swap(2, 3);
         let e = Network::compile(&m, "order").unwrap_err().to_string();
         assert!(e.contains("used before it is computed"), "{e}");
+    }
+
+    #[test]
+    fn shapes_too_large_to_hold_are_rejected_before_allocating() {
+        // A constant whose dimensions multiply past usize (this used to panic on the product).
+        let mut m = small_model();
+        m.tensors[5].shape = vec![1 << 32, 1 << 32];
+        let e = Network::compile(&m, "huge.tflite").unwrap_err().to_string();
+        assert!(
+            e.contains("huge.tflite") && e.contains("alpha") && e.contains("too large"),
+            "{e}"
+        );
+        // An activation of 2^40 values.
+        let mut m = small_model();
+        m.tensors[4].shape = vec![1, 1 << 20, 1 << 20, 1];
+        let e = Network::compile(&m, "big").unwrap_err().to_string();
+        assert!(e.contains("conv of shape 1×1048576×1048576×1"), "{e}");
+    }
+
+    #[test]
+    fn a_constant_must_have_the_values_its_shape_says() {
+        // DEQUANTIZE hands its input's 4 values to a kernel of shape 3×1×1×2 (the convolution
+        // used to read past them).
+        let mut m = small_model();
+        m.tensors[2].shape = vec![3, 1, 1, 2];
+        let e = Network::compile(&m, "short").unwrap_err().to_string();
+        assert!(
+            e.contains("constant k has 4 values for its shape 3×1×1×2"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn activations_past_the_memory_limit_are_rejected_before_allocating() {
+        // Six live tensors of 2^26 values (the input and five outputs): 1.5 GiB in all.
+        let side = 1 << 13;
+        let mut tensors = vec![tensor("x", &[1, side, side, 1], TensorType::Float32, 0)];
+        let mut operators = Vec::new();
+        for k in 1..=5 {
+            tensors.push(tensor(
+                &format!("y{k}"),
+                &[1, side, side, 1],
+                TensorType::Float32,
+                0,
+            ));
+            operators.push(op(OpCode::Relu, &[0], k));
+        }
+        let model = TfliteModel {
+            tensors,
+            operators,
+            inputs: vec![0],
+            outputs: (1..=5).collect(),
+            buffers: vec![Vec::new()],
+        };
+        let e = Network::compile(&model, "wide.tflite")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("wide.tflite") && e.contains("weights and activations need more than"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_graph_of_more_than_one_input_is_rejected() {
+        // A second input listed as an output had no buffer of its own: reading that output
+        // used to index past the first input's buffer.
+        let mut m = small_model();
+        m.tensors
+            .push(tensor("second", &[1, 64], TensorType::Float32, 0));
+        m.inputs.push(9);
+        m.outputs.push(9);
+        let e = Network::compile(&m, "two_inputs.tflite")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("two_inputs.tflite") && e.contains("the graph has 2 inputs"),
+            "{e}"
+        );
     }
 }

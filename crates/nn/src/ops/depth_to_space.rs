@@ -1,10 +1,12 @@
 /// `DEPTH_TO_SPACE` (TensorFlow's DCR order), batch 1: `x` is `[H, W, b²·C]`, `y` is
 /// `[H·b, W·b, C]` with `y[yy·b + i, xx·b + j, c] = x[yy, xx, (i·b + j)·C + c]`.
 ///
+/// Copies only; not inlined into the step loop.
+///
 /// # Panics
 /// If `x` or `y` does not have the implied size.
 #[track_caller]
-#[inline(always)]
+#[inline(never)]
 pub fn depth_to_space(x: &[f32], h: usize, w: usize, c_out: usize, block: usize, y: &mut [f32]) {
     let c_in = block * block * c_out;
     assert_eq!(x.len(), h * w * c_in, "depth_to_space input size");

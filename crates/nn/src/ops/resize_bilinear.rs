@@ -48,10 +48,13 @@ impl ResizeAxis {
 /// `lerp(lerp(x[lo_y, lo_x], x[lo_y, hi_x], f_x), lerp(x[hi_y, lo_x], x[hi_y, hi_x], f_x), f_y)`
 /// with `lerp(a, b, f) = a + (b − a)·f` (the same weights as TFLite's reference kernel).
 ///
+/// Not inlined into the step loop (only the full-range detector uses it, on small tensors);
+/// the compiler vectorises it for SSE.
+///
 /// # Panics
 /// If a tap lies outside `x` or `y` has another size.
 #[track_caller]
-#[inline(always)]
+#[inline(never)]
 pub fn resize_bilinear(
     x: &[f32],
     in_w: usize,
