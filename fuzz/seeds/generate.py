@@ -110,6 +110,12 @@ def ply():
     body += struct.pack(">h", -7)
     write("ply", "binary_be_quad.ply", head.encode() + body)
     # An element whose items take no bytes, with a huge count (used to hang the reader).
+    # A second vertex element (its vertices came without the first one's normals).
+    write("ply", "two_vertex_elements.ply",
+          "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+          "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+          "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+          "0 0 1 0 0 -1\n1 0 1\n")
     write("ply", "binary_empty_element.ply",
           b"ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\n"
           b"property float y\nproperty float z\nelement padding 99999999999999999\nend_header\n"
@@ -285,18 +291,26 @@ def model(tensors, ops, inputs, outputs, buffers):
     return bytes(buf)
 
 
-def tflite():
-    # x -> conv 1x1 (float16 kernel behind DEQUANTIZE) -> PReLU -> + x -> reshape.
-    write("tflite", "conv_prelu_add.tflite", model(
+def small_model(alpha_shape=(1, 1, 2), inputs=(0,), outputs=(8,), extra=()):
+    """x -> conv 1x1 (float16 kernel behind DEQUANTIZE) -> PReLU -> + x -> reshape."""
+    return model(
         [("x", [1, 2, 2, 2], FLOAT32, 0), ("k16", [2, 1, 1, 2], FLOAT16, 1),
          ("k", [2, 1, 1, 2], FLOAT32, 0), ("bias", [2], FLOAT32, 2),
-         ("conv", [1, 2, 2, 2], FLOAT32, 0), ("alpha", [1, 1, 2], FLOAT32, 3),
+         ("conv", [1, 2, 2, 2], FLOAT32, 0), ("alpha", list(alpha_shape), FLOAT32, 3),
          ("prelu", [1, 2, 2, 2], FLOAT32, 0), ("sum", [1, 2, 2, 2], FLOAT32, 0),
-         ("flat", [1, 8], FLOAT32, 0)],
+         ("flat", [1, 8], FLOAT32, 0)] + list(extra),
         [("DEQUANTIZE", [1], [2]), ("CONV_2D", [0, 2, 3], [4], [("i8", 0), ("i32", 1), ("i32", 1)]),
          ("PRELU", [4, 5], [6]), ("ADD", [0, 6], [7], [("i8", 0)]), ("RESHAPE", [7, -1], [8])],
-        [0], [8],
-        [b"", f16s([0x3C00, 0, 0, 0xBC00]), f32s([0.5, 0.0]), f32s([0.25, 0.5])]))
+        list(inputs), list(outputs),
+        [b"", f16s([0x3C00, 0, 0, 0xBC00]), f32s([0.5, 0.0]), f32s([0.25, 0.5])])
+
+
+def tflite():
+    write("tflite", "conv_prelu_add.tflite", small_model())
+    # Findings: dimensions whose product overflows; a second input read as an output.
+    write("tflite", "huge_shape.tflite", small_model(alpha_shape=(0x7FFFFFFF, 0x7FFFFFFF, 8)))
+    write("tflite", "two_inputs.tflite",
+          small_model(inputs=(0, 9), outputs=(8, 9), extra=[("second", [1, 64], FLOAT32, 0)]))
     # x -> depthwise 3x3 SAME -> ReLU -> max pool 2x2/2 -> pad -> concat with x.
     write("tflite", "depthwise_pool_pad_concat.tflite", model(
         [("x", [1, 4, 4, 2], FLOAT32, 0), ("dk", [1, 3, 3, 2], FLOAT32, 1),

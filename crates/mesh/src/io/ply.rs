@@ -405,6 +405,14 @@ pub fn parse_ply(data: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
                         format!("element count {count:?} is not a non-negative integer"),
                     )
                 })?;
+                // Another vertex element would add vertices without the first one's
+                // attributes, and face indices would be checked against its count alone.
+                if *name == "vertex" && elements.iter().any(|e| e.name == "vertex") {
+                    return Err(syntax(
+                        line_no,
+                        "a second vertex element (a PLY file has one)".into(),
+                    ));
+                }
                 elements.push(Element {
                     name: name.to_string(),
                     count,
@@ -749,6 +757,20 @@ mod tests {
             .to_string();
         assert!(
             err.contains("truncated") && err.contains("padding 0"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn a_second_vertex_element_is_an_error() {
+        // The second element's vertices came without the first one's normals, so the mesh had
+        // fewer normals than vertices.
+        let text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 1 0 0 -1\n1 0 1\n";
+        let err = parse_ply(text.as_bytes(), Path::new("two.ply"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("two.ply:10:") && err.contains("second vertex element"),
             "{err}"
         );
     }
