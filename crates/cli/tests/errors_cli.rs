@@ -211,6 +211,14 @@ const OTHER_TESTS: &[(&str, &str)] = &[
         "run_cli::a_killed_run_leaves_complete_files_and_a_rerun_must_choose",
     ),
     (
+        "a full disk during a run",
+        "run_cli::a_full_disk_stops_the_run_naming_the_file_and_resume_goes_on",
+    ),
+    (
+        "`--resume` with other options than the run it continues",
+        "run_cli::a_killed_run_resumes_where_it_stopped",
+    ),
+    (
         "a video that breaks part-way",
         "run_cli::a_truncated_video_keeps_the_readable_frames_and_names_the_break",
     ),

@@ -458,12 +458,144 @@ fn ctrl_c_stops_after_a_frame_and_keeps_the_work() {
         frames
     );
     assert!(out.join("camera.json").is_file());
-    let leftovers: Vec<_> = std::fs::read_dir(&out)
+    assert!(tmp_files(&out).is_empty(), "{:?}", tmp_files(&out));
+
+    // --resume goes on after the last frame (here with a frame limit four frames further).
+    let limit = (frames + 4).to_string();
+    let o = visage(&[
+        "run",
+        s(&clip),
+        "--out",
+        s(&out),
+        "--ply",
+        "--max-frames",
+        &limit,
+        "--resume",
+        "--models",
+        s(&models),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let m = json(&out.join("metrics.json"));
+    assert_eq!(m["resumed"]["previous_status"], "interrupted");
+    assert_eq!(m["resumed"]["after_frame"], frames - 1);
+    assert_eq!(m["frames"].as_array().unwrap().len(), 4);
+    assert_whole_run(&out, frames + 4);
+}
+
+fn tmp_files(dir: &Path) -> Vec<PathBuf> {
+    std::fs::read_dir(dir)
         .unwrap()
         .filter_map(|e| e.ok())
-        .filter(|e| e.path().extension().is_some_and(|x| x == "tmp"))
-        .collect();
-    assert!(leftovers.is_empty(), "{leftovers:?}");
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "tmp"))
+        .collect()
+}
+
+/// `out` holds a finished run over the input's first `frames` frames: every stream has every
+/// frame once, in order, and no file is left under a temporary name.
+#[track_caller]
+fn assert_whole_run(out: &Path, frames: usize) {
+    assert_eq!(ply_count(&out.join("meshes")), frames);
+    assert_whole_run_without_plys(out, frames);
+}
+
+/// [`assert_whole_run`] of a run without `--ply`.
+#[track_caller]
+fn assert_whole_run_without_plys(out: &Path, frames: usize) {
+    let indices = |v: &Value| -> Vec<u64> {
+        v["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f["index"].as_u64().unwrap())
+            .collect()
+    };
+    let all: Vec<u64> = (0..frames as u64).collect();
+    assert_eq!(indices(&json(&out.join("landmarks.json"))), all);
+    assert_eq!(indices(&json(&out.join("blendshapes.json"))), all);
+    let csv = std::fs::read_to_string(out.join("blendshapes.csv")).unwrap();
+    assert_eq!(csv.lines().count(), frames + 1);
+    assert_eq!(
+        visage_mesh::io::read_pc2(&out.join("sequence.pc2"))
+            .unwrap()
+            .samples(),
+        frames
+    );
+    assert_eq!(json(&out.join("metrics.json"))["status"], "complete");
+    assert!(out.join("identity.json").is_file());
+    assert!(tmp_files(out).is_empty(), "{:?}", tmp_files(out));
+}
+
+/// SIGKILL part-way, then `--resume`: the files are cut back to the last frame they all hold
+/// and the run goes on after it, so that the folder ends as a run over every frame; a second
+/// `--resume` has nothing to do; other options are refused, naming what differs.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_killed_run_resumes_where_it_stopped() {
+    let (models, clip) = inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let args = [
+        "run",
+        s(&clip),
+        "--out",
+        s(&out),
+        "--ply",
+        "--max-frames",
+        "60",
+        "--models",
+        s(&models),
+    ];
+    let mut child = Command::new(env!("CARGO_BIN_EXE_visage"))
+        .args(args)
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while !out.join("meshes/000008.ply").exists() {
+        assert!(
+            started.elapsed().as_secs() < 120,
+            "no mesh after two minutes"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(json(&out.join("metrics.json"))["status"], "running");
+
+    let resume = [&args[..], &["--resume"]].concat();
+    let o = visage(&resume);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("continuing after frame"), "{err}");
+    let m = json(&out.join("metrics.json"));
+    let after = m["resumed"]["after_frame"].as_u64().unwrap() as usize;
+    // Frame 8's PLY was written after its landmarks record, which may not have reached the
+    // disk whole; frame 7's record did, and is done again.
+    assert!(after >= 6, "resumed after frame {after}");
+    assert_eq!(m["resumed"]["previous_status"], "running");
+    assert_eq!(m["resumed"]["frames"], after + 1);
+    assert_eq!(m["frames"].as_array().unwrap().len(), 59 - after);
+    assert_whole_run(&out, 60);
+
+    let o = visage(&resume);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("nothing to resume"), "{err}");
+
+    let other = [&resume[..], &["--lambda", "5"]].concat();
+    let o = visage(&other);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("cannot resume") && err.contains("weights"),
+        "{err}"
+    );
+    assert_whole_run(&out, 60);
 }
 
 /// SIGKILL leaves no half-written file under a final name (every file that looks complete
@@ -547,6 +679,60 @@ fn a_killed_run_leaves_complete_files_and_a_rerun_must_choose() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("\"complete\" over 5 frames"), "{err}");
+}
+
+/// A full disk, here a file-size limit (writes past it fail as they do on a full disk): the
+/// run stops with exit 2 naming the file, metrics.json says "failed" with the cause, and
+/// `--resume` goes on once there is room.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_full_disk_stops_the_run_naming_the_file_and_resume_goes_on() {
+    let (models, clip) = inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let args = [
+        "run",
+        s(&clip),
+        "--out",
+        s(&out),
+        "--max-frames",
+        "40",
+        "--models",
+        s(&models),
+    ];
+    // 400 KiB per file: room for mesh.obj (~300 KB), not for 40 frames of landmarks (~20 KB
+    // each). SIGXFSZ is ignored, so a write past the limit fails with EFBIG.
+    let o = Command::new("bash")
+        .arg("-c")
+        .arg("trap '' XFSZ; ulimit -f 400; exec \"$0\" \"$@\"")
+        .arg(env!("CARGO_BIN_EXE_visage"))
+        .args(args)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("cannot write") && err.contains(s(&out)) && err.contains("too large"),
+        "{err}"
+    );
+    let m = json(&out.join("metrics.json"));
+    assert_eq!(m["status"], "failed");
+    assert!(m["error"].as_str().unwrap().contains("too large"), "{m}");
+    let frames = m["frames"].as_array().unwrap().len();
+    assert!((2..40).contains(&frames), "{frames} frames");
+
+    let resume = [&args[..], &["--resume"]].concat();
+    let o = visage(&resume);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(
+        json(&out.join("metrics.json"))["resumed"]["previous_status"],
+        "failed"
+    );
+    assert_whole_run_without_plys(&out, 40);
 }
 
 /// Two portraits side by side: `--faces largest` meshes one and warns about the other;

@@ -595,8 +595,21 @@ fn create_tmp(path: &Path) -> Result<(PathBuf, BufWriter<File>), Error> {
     Ok((tmp, BufWriter::new(file)))
 }
 
-/// Writes `tail`, flushes `out` to `tmp` and renames it to `path`; on failure `tmp` is
-/// removed.
+/// Opens `path`'s existing temporary sibling for appending.
+fn open_tmp_for_append(path: &Path) -> Result<(PathBuf, BufWriter<File>), Error> {
+    let tmp = tmp_path(path);
+    let file = std::fs::OpenOptions::new()
+        .append(true)
+        .open(&tmp)
+        .map_err(|source| Error::Write {
+            path: tmp.clone(),
+            source,
+        })?;
+    Ok((tmp, BufWriter::new(file)))
+}
+
+/// Writes `tail`, flushes `out` to `tmp` and renames it to `path`; on failure `tmp` stays
+/// (with what it holds).
 fn finish_tmp(
     mut out: BufWriter<File>,
     tail: &[u8],
@@ -617,9 +630,6 @@ fn finish_tmp(
                 source,
             })
         });
-    if result.is_err() {
-        let _ = std::fs::remove_file(tmp);
-    }
     result.map(|()| path.to_owned())
 }
 
@@ -643,8 +653,9 @@ fn invalid_frame(path: &Path, reason: String) -> Error {
 }
 
 /// Streams frames to a Live Link Face CSV (the module's docs): rows go to `<name>.tmp`, which
-/// [`finish`](Self::finish) renames to the final name; dropped unfinished, the temporary file
-/// is removed and no CSV appears.
+/// [`finish`](Self::finish) renames to the final name; dropped unfinished (or when finishing
+/// fails), the rows so far stay under the temporary name, where `visage run --resume` finds
+/// them.
 pub struct LiveLinkCsvWriter {
     path: PathBuf,
     tmp: PathBuf,
@@ -686,6 +697,24 @@ impl LiveLinkCsvWriter {
         Ok(writer)
     }
 
+    /// Continues `dir/blendshapes.csv`'s temporary file, which holds its header and `rows`
+    /// rows (a resumed run; [`crate::prepare_resume`] cut it there).
+    ///
+    /// # Errors
+    /// `fps` not positive and finite; the temporary file cannot be opened.
+    pub fn append_in_dir(dir: &Path, fps: f64, rows: usize) -> Result<LiveLinkCsvWriter, Error> {
+        check_fps(fps)?;
+        let path = dir.join(BLENDSHAPES_CSV);
+        let (tmp, out) = open_tmp_for_append(&path)?;
+        Ok(LiveLinkCsvWriter {
+            path,
+            tmp,
+            out: Some(out),
+            fps,
+            rows,
+        })
+    }
+
     /// The final path.
     pub fn path(&self) -> &Path {
         &self.path
@@ -694,6 +723,15 @@ impl LiveLinkCsvWriter {
     /// Rows written so far.
     pub fn rows(&self) -> usize {
         self.rows
+    }
+
+    /// Hands the rows so far to the operating system.
+    ///
+    /// # Errors
+    /// The temporary file cannot be written.
+    pub fn flush(&mut self) -> Result<(), Error> {
+        let result = self.out.as_mut().map_or(Ok(()), Write::flush);
+        result.map_err(|source| self.io_error(source))
     }
 
     /// Appends `frame`'s row.
@@ -736,16 +774,9 @@ impl LiveLinkCsvWriter {
     }
 }
 
-impl Drop for LiveLinkCsvWriter {
-    fn drop(&mut self) {
-        if self.out.take().is_some() {
-            let _ = std::fs::remove_file(&self.tmp);
-        }
-    }
-}
-
 /// Streams frames to `blendshapes.json` (the module's docs), compact, under `<name>.tmp` until
-/// [`finish`](Self::finish); dropped unfinished, the temporary file is removed.
+/// [`finish`](Self::finish); dropped unfinished, the frames so far stay under the temporary
+/// name.
 pub struct BlendshapesJsonWriter {
     path: PathBuf,
     tmp: PathBuf,
@@ -782,6 +813,22 @@ impl BlendshapesJsonWriter {
         Ok(writer)
     }
 
+    /// Continues `dir/blendshapes.json`'s temporary file, which holds its head and `frames`
+    /// frames (a resumed run; [`crate::prepare_resume`] cut it there).
+    ///
+    /// # Errors
+    /// The temporary file cannot be opened.
+    pub fn append_in_dir(dir: &Path, frames: usize) -> Result<BlendshapesJsonWriter, Error> {
+        let path = dir.join(BLENDSHAPES_JSON);
+        let (tmp, out) = open_tmp_for_append(&path)?;
+        Ok(BlendshapesJsonWriter {
+            path,
+            tmp,
+            out: Some(out),
+            frames,
+        })
+    }
+
     /// The final path.
     pub fn path(&self) -> &Path {
         &self.path
@@ -790,6 +837,15 @@ impl BlendshapesJsonWriter {
     /// Frames written so far.
     pub fn frames(&self) -> usize {
         self.frames
+    }
+
+    /// Hands the frames so far to the operating system.
+    ///
+    /// # Errors
+    /// The temporary file cannot be written.
+    pub fn flush(&mut self) -> Result<(), Error> {
+        let result = self.out.as_mut().map_or(Ok(()), Write::flush);
+        result.map_err(|source| self.io_error(source))
     }
 
     /// Appends `frame`.
@@ -829,14 +885,6 @@ impl BlendshapesJsonWriter {
         Error::Write {
             path: self.tmp.clone(),
             source,
-        }
-    }
-}
-
-impl Drop for BlendshapesJsonWriter {
-    fn drop(&mut self) {
-        if self.out.take().is_some() {
-            let _ = std::fs::remove_file(&self.tmp);
         }
     }
 }
@@ -903,7 +951,7 @@ mod tests {
     }
 
     #[test]
-    fn unfinished_writers_leave_nothing() {
+    fn unfinished_writers_leave_their_frames_under_the_temporary_name() {
         let dir = tempfile::tempdir().unwrap();
         let mut csv = LiveLinkCsvWriter::in_dir(dir.path(), 30.0).unwrap();
         let mut json = BlendshapesJsonWriter::in_dir(dir.path(), Some(30.0)).unwrap();
@@ -916,7 +964,16 @@ mod tests {
         assert!(json.write(&bad).is_err());
         assert!(csv.write(&sample_frame(2, f64::NAN)).is_err());
         drop((csv, json));
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        // Nothing under a final name; the frames written so far under the temporary ones,
+        // where a resumed run continues them.
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["blendshapes.csv.tmp", "blendshapes.json.tmp"]);
+        let csv_rows = std::fs::read_to_string(dir.path().join("blendshapes.csv.tmp")).unwrap();
+        assert_eq!(csv_rows.lines().count(), 2, "the header and frame 0");
         assert!(LiveLinkCsvWriter::in_dir(dir.path(), 0.0).is_err());
         assert!(BlendshapesJsonWriter::in_dir(dir.path(), Some(f64::NAN)).is_err());
         let missing = dir.path().join("no/such/dir");

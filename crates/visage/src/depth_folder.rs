@@ -133,6 +133,8 @@ pub fn fuse_depth_folder(
         input: sequence.dir.display().to_string(),
         intrinsics: *k,
         parameters: *options,
+        selection: None,
+        resumed: None,
         mesh,
         solver: Some(run.solver),
         summary: run.recorder.summary(timing),

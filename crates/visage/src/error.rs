@@ -55,6 +55,16 @@ pub enum Error {
         path: PathBuf,
         source: std::io::Error,
     },
+    /// A file of a previous run could not be read.
+    #[error("cannot read {}", path.display())]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A previous run in an output folder cannot be continued (`reason` says why and what to
+    /// do instead).
+    #[error("{}: cannot resume the run in this folder: {reason}", dir.display())]
+    Resume { dir: PathBuf, reason: String },
     /// A mesh file could not be written.
     #[error("cannot write {}", path.display())]
     WriteMesh { path: PathBuf, source: MeshIoError },

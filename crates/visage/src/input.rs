@@ -19,11 +19,20 @@ pub struct Input {
     frame_count: Option<usize>,
     every: usize,
     max_frames: Option<usize>,
+    /// Frames up to this input index were processed by an earlier run (`--resume`): skipped.
+    after: Option<usize>,
     kept: usize,
     /// Which kept frames to copy, and where to.
     copies: Option<(FrameFilter, KeptFrames)>,
     /// Set from outside (Ctrl-C): the input ends before its next frame.
     stop: Option<Arc<AtomicBool>>,
+}
+
+/// Which of an input's frames a run processes: every `every`-th, at most `max_frames` of them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct FrameSelection {
+    pub every: usize,
+    pub max_frames: Option<usize>,
 }
 
 /// Chooses the frames [`Input::keep_copies`] copies.
@@ -79,6 +88,7 @@ impl Input {
             frame_count,
             every: 1,
             max_frames: None,
+            after: None,
             kept: 0,
             copies: None,
             stop: None,
@@ -117,6 +127,26 @@ impl Input {
         Ok(self)
     }
 
+    /// Starts after input frame `index`: the kept frames up to it were processed by an earlier
+    /// run, and still count towards [`Input::max_frames`]. An image folder's earlier files are
+    /// not read; a video's earlier frames are decoded and dropped.
+    pub fn after(mut self, index: usize) -> Input {
+        self.after = Some(index);
+        self.kept = index / self.every + 1;
+        if let FrameSource::Images { paths, next, .. } = &mut self.source {
+            *next = (index + 1).min(paths.len());
+        }
+        self
+    }
+
+    /// Which frames are kept.
+    pub fn selection(&self) -> FrameSelection {
+        FrameSelection {
+            every: self.every,
+            max_frames: self.max_frames,
+        }
+    }
+
     /// Copies every kept frame `select` chooses into `into` as it is decoded.
     pub fn keep_copies(
         mut self,
@@ -146,7 +176,8 @@ impl Input {
     /// How many frames will be kept, when the input's length is known.
     pub fn frames_to_process(&self) -> Option<usize> {
         let n = self.frame_count?.div_ceil(self.every);
-        Some(self.max_frames.map_or(n, |m| n.min(m)))
+        let done = self.after.map_or(0, |index| index / self.every + 1);
+        Some(self.max_frames.map_or(n, |m| n.min(m)).saturating_sub(done))
     }
 
     /// Frames per second of the input (a video's stream rate; none for images).
@@ -190,7 +221,7 @@ impl Input {
                 Ok(f) => f,
                 Err(e) => return Some(Err(e.into())),
             };
-            if frame.index % self.every != 0 {
+            if frame.index % self.every != 0 || self.after.is_some_and(|a| frame.index <= a) {
                 continue;
             }
             self.kept += 1;

@@ -52,6 +52,7 @@ mod error;
 mod gaze;
 mod histogram;
 mod input;
+mod json_records;
 mod keypoint_motion;
 mod landmark_smoothing;
 mod landmarks;
@@ -64,6 +65,7 @@ mod quality;
 mod reconstructor;
 mod recorder;
 mod rest_pose;
+mod resume;
 mod rigid_jitter;
 mod run_folder;
 mod shot_cut;
@@ -84,7 +86,7 @@ pub use config::{
 pub use depth_folder::{fuse_depth_folder, FuseOptions};
 pub use error::Error;
 pub use gaze::{eye_gaze, eye_look_weights, EyeGaze};
-pub use input::{Input, KeptFrames};
+pub use input::{FrameSelection, Input, KeptFrames};
 pub use keypoint_motion::{
     FACE_MARGIN, INLIER_THRESHOLD_M, MAX_FACE_CROP_PX, MAX_FACE_KEYPOINTS, MIN_INLIERS,
 };
@@ -105,6 +107,7 @@ pub use pipeline::QUEUE_CAPACITY;
 pub use quality::{FusedAndRaw, QualitySummary};
 pub use reconstructor::{error_chain, FrameResult, Identity, Reconstructor, RunOutcome};
 pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP};
+pub use resume::{prepare_resume, ResumePoint, ResumeState, RunDescription};
 pub use rigid_jitter::rigid_residual_rms;
 pub use run_folder::{
     clear_outputs, inspect as inspect_output_folder, FolderContents, FACE_FOLDER_PREFIX,

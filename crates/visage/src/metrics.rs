@@ -499,6 +499,14 @@ pub struct Report<P: Serialize> {
     /// The camera the meshes are in.
     pub intrinsics: Intrinsics,
     pub parameters: P,
+    /// Which input frames the run processes (set by the caller that chose them).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub selection: Option<crate::input::FrameSelection>,
+    /// A resumed run: where it continued, and what the files kept from before. `frames`
+    /// lists the frames after the resume point; the summary covers every frame this run
+    /// processed, its warm-up included.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub resumed: Option<crate::resume::ResumePoint>,
     pub mesh: MeshSummary,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub solver: Option<SolverSummary>,

@@ -20,6 +20,7 @@ use crate::animation::{BlendshapeFrame, BlendshapesJsonWriter, LiveLinkCsvWriter
 use crate::atomic_write::{tmp_path, write_atomically, write_json_atomically};
 use crate::landmarks::LandmarksFrame;
 use crate::reconstructor::Identity;
+use crate::resume::{ResumePoint, RunDescription};
 use crate::sink::{FrameSink, MeshFrame};
 use crate::Error;
 
@@ -38,6 +39,8 @@ pub struct OutputDir {
     frames: Vec<usize>,
     /// One frame's surface in the y-up axes.
     y_up: Vec<[f64; 3]>,
+    /// A resumed run: the streamed files continue from here ([`OutputDir::resuming`]).
+    resume: Option<ResumePoint>,
 }
 
 /// `sequence.pc2` being written: one sample per meshed frame as they come; frames without a
@@ -89,7 +92,17 @@ impl OutputDir {
             mesh: TriMesh::new(Vec::new(), Vec::new()),
             frames: Vec::new(),
             y_up: Vec::new(),
+            resume: None,
         })
+    }
+
+    /// Continues a run that stopped part-way, from the files [`crate::prepare_resume`] cut
+    /// back to `point`: the `with_…` calls that follow append to the streamed files rather than
+    /// starting them, and the frames up to the resume point (the warm-up) are not written
+    /// again.
+    pub fn resuming(mut self, point: ResumePoint) -> OutputDir {
+        self.resume = Some(point);
+        self
     }
 
     /// A PLY per meshed frame: the fused surface in `meshes/` (with `fused`) and the raw one
@@ -119,9 +132,27 @@ impl OutputDir {
     /// [`camera_to_y_up`]. Blender's OBJ importer keeps a file's numbers in the mesh and puts
     /// its axis change on the object, and the Mesh Cache modifier writes mesh coordinates, so
     /// the cache holds the same numbers as the OBJ's `v` lines.
-    pub fn with_point_cache(mut self) -> OutputDir {
-        self.cache = PointCacheState::Pending;
-        self
+    ///
+    /// # Errors
+    /// A resumed run whose point cache cannot be continued.
+    pub fn with_point_cache(mut self) -> Result<OutputDir, Error> {
+        self.cache = match &self.resume {
+            Some(point) if !point.cache_indices.is_empty() => {
+                let tmp = tmp_path(&self.dir.join(POINT_CACHE_FILE));
+                let samples = u32::try_from(point.cache_indices.len()).unwrap_or(u32::MAX);
+                let writer =
+                    Pc2Writer::append(&tmp, samples).map_err(|source| Error::WriteMesh {
+                        path: tmp.clone(),
+                        source,
+                    })?;
+                PointCacheState::Writing {
+                    writer,
+                    meshed: point.cache_indices.clone(),
+                }
+            }
+            _ => PointCacheState::Pending,
+        };
+        Ok(self)
     }
 
     /// Starts `landmarks.json`: the frames' landmarks records go there from now on.
@@ -134,6 +165,15 @@ impl OutputDir {
             path: tmp.clone(),
             source,
         };
+        if let Some(point) = &self.resume {
+            let file = std::fs::OpenOptions::new()
+                .append(true)
+                .open(&tmp)
+                .map_err(write_error)?;
+            self.frames = point.frame_indices.clone();
+            self.landmarks = Some((BufWriter::new(file), point.frames > 0));
+            return Ok(self);
+        }
         let mut w = BufWriter::new(File::create(&tmp).map_err(write_error)?);
         w.write_all(b"{\"frames\": [").map_err(write_error)?;
         self.landmarks = Some((w, false));
@@ -146,8 +186,17 @@ impl OutputDir {
     /// # Errors
     /// When the files cannot be created.
     pub fn with_blendshapes(mut self, fps: Option<f64>) -> Result<OutputDir, Error> {
-        let csv = LiveLinkCsvWriter::in_dir(&self.dir, fps.unwrap_or(DEFAULT_TIMECODE_FPS))?;
-        let json = BlendshapesJsonWriter::in_dir(&self.dir, fps)?;
+        let timecode_fps = fps.unwrap_or(DEFAULT_TIMECODE_FPS);
+        let (csv, json) = match &self.resume {
+            Some(point) => (
+                LiveLinkCsvWriter::append_in_dir(&self.dir, timecode_fps, point.blendshape_frames)?,
+                BlendshapesJsonWriter::append_in_dir(&self.dir, point.blendshape_frames)?,
+            ),
+            None => (
+                LiveLinkCsvWriter::in_dir(&self.dir, timecode_fps)?,
+                BlendshapesJsonWriter::in_dir(&self.dir, fps)?,
+            ),
+        };
         self.blendshapes = Some((csv, json));
         Ok(self)
     }
@@ -186,19 +235,19 @@ impl OutputDir {
     }
 
     /// Writes the `metrics.json` of a run that has started: `"status": "running"`, the input,
-    /// the camera and the parameters (the final one replaces it).
-    pub fn write_running(
-        &self,
-        input: &str,
-        intrinsics: &Intrinsics,
-        parameters: &impl serde::Serialize,
-    ) -> Result<(), Error> {
-        self.write_metrics(&serde_json::json!({
-            "status": crate::RunStatus::Running,
-            "input": input,
-            "intrinsics": intrinsics,
-            "parameters": parameters,
-        }))
+    /// the camera, the parameters and the frame selection, and where a resumed run continues
+    /// (the final one replaces it).
+    pub fn write_running(&self, run: &RunDescription<'_>) -> Result<(), Error> {
+        let mut metrics = serde_json::json!({ "status": crate::RunStatus::Running });
+        if let (Some(m), Ok(serde_json::Value::Object(run))) =
+            (metrics.as_object_mut(), serde_json::to_value(run))
+        {
+            m.extend(run);
+            if let Some(point) = &self.resume {
+                m.insert("resumed".into(), serde_json::json!(point));
+            }
+        }
+        self.write_metrics(&metrics)
     }
 
     /// Writes `metrics.json`.
@@ -208,12 +257,21 @@ impl OutputDir {
 
     /// Closes `landmarks.json` and the blendshape files (also after a failed run: they then
     /// hold the frames so far).
+    ///
+    /// # Errors
+    /// The first file that could not be finished; the others are finished all the same, and a
+    /// file that could not be stays under its temporary name (`visage run --resume` reads it).
     pub fn finish(&mut self) -> Result<(), Error> {
-        self.finish_point_cache()?;
+        let mut results = vec![self.finish_point_cache()];
         if let Some((csv, json)) = self.blendshapes.take() {
-            csv.finish()?;
-            json.finish()?;
+            results.push(csv.finish().map(drop));
+            results.push(json.finish().map(drop));
         }
+        results.push(self.finish_landmarks());
+        results.into_iter().collect()
+    }
+
+    fn finish_landmarks(&mut self) -> Result<(), Error> {
         let Some((mut w, _)) = self.landmarks.take() else {
             return Ok(());
         };
@@ -231,6 +289,27 @@ impl OutputDir {
 }
 
 impl OutputDir {
+    /// Hands everything streamed so far to the operating system.
+    fn flush_streams(&mut self) -> Result<(), Error> {
+        if let Some((w, _)) = &mut self.landmarks {
+            w.flush().map_err(|source| Error::Write {
+                path: tmp_path(&self.dir.join("landmarks.json")),
+                source,
+            })?;
+        }
+        if let Some((csv, json)) = &mut self.blendshapes {
+            csv.flush()?;
+            json.flush()?;
+        }
+        if let PointCacheState::Writing { writer, .. } = &mut self.cache {
+            writer.flush().map_err(|source| Error::WriteMesh {
+                path: tmp_path(&self.dir.join(POINT_CACHE_FILE)),
+                source,
+            })?;
+        }
+        Ok(())
+    }
+
     /// Starts the point cache on the first meshed frame: `mesh.obj`, `mesh.mtl` and the cache.
     fn start_point_cache(&mut self, vertices: &[[f64; 3]]) -> Result<(), Error> {
         let mesh_error = |path: &Path| {
@@ -294,8 +373,22 @@ impl OutputDir {
     }
 }
 
+impl OutputDir {
+    /// Whether frame `index` was written by the run this one resumes (a warm-up frame).
+    fn written_before(&self, index: usize) -> bool {
+        self.resume.as_ref().is_some_and(|p| index <= p.after_frame)
+    }
+}
+
 impl FrameSink for OutputDir {
     fn landmarks(&mut self, record: &LandmarksFrame) -> Result<(), Error> {
+        if self.written_before(record.index) {
+            return Ok(());
+        }
+        // The earlier frames' outputs reach the operating system before this frame's record:
+        // after a kill, every stream holds every frame before the last landmarks record
+        // ([`crate::prepare_resume`]).
+        self.flush_streams()?;
         self.frames.push(record.index);
         let Some((w, started)) = &mut self.landmarks else {
             return Ok(());
@@ -313,6 +406,9 @@ impl FrameSink for OutputDir {
     }
 
     fn blendshapes(&mut self, frame: &BlendshapeFrame) -> Result<(), Error> {
+        if self.written_before(frame.index) {
+            return Ok(());
+        }
         if let Some((csv, json)) = &mut self.blendshapes {
             csv.write(frame)?;
             json.write(frame)?;
@@ -321,6 +417,9 @@ impl FrameSink for OutputDir {
     }
 
     fn mesh(&mut self, frame: &MeshFrame<'_>) -> Result<(), Error> {
+        if self.written_before(frame.index) {
+            return Ok(());
+        }
         let name = format!("{:06}.ply", frame.index);
         let s = frame.surfaces;
         if self.mesh.triangles != frame.triangles {

@@ -137,6 +137,8 @@ impl RunOutcome {
             input: input.to_owned(),
             intrinsics: self.intrinsics,
             parameters: &self.parameters,
+            selection: None,
+            resumed: None,
             mesh: self.mesh.clone(),
             solver: None,
             summary: self.summary.clone(),
@@ -153,8 +155,13 @@ pub fn error_chain(e: &(dyn std::error::Error + 'static)) -> String {
     while let Some(c) = cause {
         let part = c.to_string();
         if !text.ends_with(&part) {
+            // "cannot write F" then "F: reason": F once.
+            let named = part
+                .match_indices(": ")
+                .map(|(i, _)| i)
+                .find(|&i| text.ends_with(&part[..i]));
             text.push_str(": ");
-            text.push_str(&part);
+            text.push_str(named.map_or(&part[..], |i| &part[i + 2..]));
         }
         cause = c.source();
     }
@@ -488,5 +495,20 @@ mod tests {
         };
         let text = error_chain(&wrapped);
         assert_eq!(text.matches("disk full").count(), 1, "{text}");
+    }
+
+    #[test]
+    fn a_cause_that_starts_with_the_file_just_named_names_it_once() {
+        let e = Error::WriteMesh {
+            path: "o/sequence.pc2.tmp".into(),
+            source: visage_mesh::io::MeshIoError::Io {
+                path: "o/sequence.pc2.tmp".into(),
+                source: std::io::Error::other("File too large"),
+            },
+        };
+        assert_eq!(
+            error_chain(&e),
+            "cannot write o/sequence.pc2.tmp: File too large"
+        );
     }
 }

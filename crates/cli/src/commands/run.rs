@@ -15,7 +15,8 @@ use indicatif::ProgressBar;
 use visage::{
     BlendshapeFrame, Camera, DepthKind, DepthSequence, DepthSource, FaceTarget, FrameMetrics,
     FrameSink, Input, Intrinsics, KeptFrames, LandmarksFrame, MeshFrame, MeshKind, ModelSource,
-    OutputDir, PlyFormat, Reconstructor, TemporalMode, DEFAULT_SUBDIVISION,
+    OutputDir, PlyFormat, Reconstructor, ResumeState, RunDescription, TemporalMode,
+    DEFAULT_SUBDIVISION,
 };
 
 use std::sync::atomic::Ordering;
@@ -174,6 +175,13 @@ pub struct RunArgs {
     /// stay). Without it, a folder that is not empty is refused.
     #[arg(long)]
     pub overwrite: bool,
+    /// Continue the run in the output folder where it stopped (killed, interrupted or failed):
+    /// its files are cut back to the last frame they all hold and the run goes on after it,
+    /// with the same input and options (checked). The temporal smoothing starts afresh there.
+    /// A complete run is left as it is; an empty folder gets a new run. Not with --mode clip
+    /// or --mesh image.
+    #[arg(long, conflicts_with = "overwrite")]
+    pub resume: bool,
     /// Which faces to mesh: the largest in view (a warning says when there were others), or
     /// every face of the first frame that shows one, each tracked on its own into OUT/face-N/
     /// (N from left to right) with OUT/faces.json listing them.
@@ -351,7 +359,10 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let p = &args.pipeline;
     std::fs::metadata(&p.input)
         .with_context(|| format!("{}: cannot read the input", p.input.display()))?;
-    claim_output_folder(&args.out, args.overwrite)?;
+    // With --resume, a previous run is continued rather than refused.
+    if !args.resume || !visage::inspect_output_folder(&args.out)?.has_run() {
+        claim_output_folder(&args.out, args.overwrite)?;
+    }
     // Ctrl-C ends the input: the frames read so far go through and are written.
     let stop = interrupt::install();
     if args.faces == FacesArg::Largest {
@@ -380,7 +391,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         let dir = args.out.join(&folder);
         let result = run_face(&args, &dir, FaceTarget::Near(*bbox), &stop);
         let (status, meshed) = match &result {
-            Ok(summary) => ("complete", summary.solved + summary.carried),
+            Ok(meshed) => ("complete", *meshed),
             Err(_) => ("failed", 0),
         };
         records.push(serde_json::json!({
@@ -434,15 +445,61 @@ fn first_faces(p: &PipelineArgs) -> anyhow::Result<Vec<(usize, [f32; 4])>> {
     Ok(Vec::new())
 }
 
-/// One tracked face's run into `dir`: its summary, or the error (exit code attached).
+/// One tracked face's run into `dir` (continued with `--resume`): the frames meshed, or the
+/// error (exit code attached).
 fn run_face(
     args: &RunArgs,
     dir: &std::path::Path,
     target: FaceTarget,
     stop: &std::sync::Arc<std::sync::atomic::AtomicBool>,
-) -> anyhow::Result<visage::RunSummary> {
+) -> anyhow::Result<usize> {
     let p = &args.pipeline;
     let (mut input, reconstructor) = p.open_for(target)?;
+    let input_name = p.input.display().to_string();
+    let selection = input.selection();
+    let description = RunDescription {
+        input: &input_name,
+        intrinsics: reconstructor.intrinsics(),
+        parameters: reconstructor.parameters(),
+        selection,
+    };
+    let resume = match args.resume {
+        true => visage::prepare_resume(dir, &description)?,
+        false => ResumeState::Fresh,
+    };
+    let point = match resume {
+        ResumeState::Fresh => None,
+        ResumeState::Complete { frames } => {
+            if !p.quiet {
+                eprintln!(
+                    "{}: the run there is complete ({frames} frames); nothing to resume",
+                    dir.display()
+                );
+            }
+            return Ok(meshed_in(dir));
+        }
+        ResumeState::Continue(point) => {
+            if !p.quiet {
+                eprintln!(
+                    "--resume: {} frames of the previous run (status \"{}\") kept in {}; \
+                     continuing after frame {} (warmed up on the {} frames before it){}",
+                    point.frames,
+                    point.previous_status,
+                    dir.display(),
+                    point.after_frame,
+                    point.warm_up_frames,
+                    match point.redone {
+                        0 => String::new(),
+                        n => format!(" ({n} partly written frame{} done again)", plural(n)),
+                    }
+                );
+            }
+            if let Some(index) = point.warm_up_after {
+                input = input.after(index);
+            }
+            Some(point)
+        }
+    };
     // The frames the texture is fused from, kept as they are decoded (no second decode).
     let kept = KeptFrames::default();
     if args.exports.any() {
@@ -454,20 +511,20 @@ fn run_face(
     } else {
         PlyFormat::BinaryLittleEndian
     };
-    let mut out = OutputDir::create(dir)?
+    let mut out = OutputDir::create(dir)?;
+    if let Some(point) = &point {
+        out = out.resuming(point.clone());
+    }
+    out = out
         .with_ply(format, args.ply, args.save_raw)?
-        .with_point_cache()
+        .with_point_cache()?
         .with_landmarks()?;
     if !p.no_fit {
         out = out.with_blendshapes(input.frame_rate())?;
     }
     // The camera the meshes are in: `visage render MESH --intrinsics OUT/camera.json`.
     out.write_camera(reconstructor.intrinsics())?;
-    out.write_running(
-        &p.input.display().to_string(),
-        reconstructor.intrinsics(),
-        reconstructor.parameters(),
-    )?;
+    out.write_running(&description)?;
     let bar = p.progress(&input);
     let input = input.stop_on(stop.clone());
     let mut sink = Terminal {
@@ -497,15 +554,30 @@ fn run_face(
         outcome.error = Some(e);
     }
     if let Some(identity) = &outcome.identity {
-        out.write_identity(identity)?;
+        // A failure here still leaves a metrics.json that says so.
+        if let (Err(e), None) = (out.write_identity(identity), &outcome.error) {
+            outcome.error = Some(e);
+        }
     }
-    out.write_metrics(&outcome.report(&p.input.display().to_string()))?;
+    let mut report = outcome.report(&input_name);
+    report.selection = Some(selection);
+    // The warm-up frames' records are the previous run's.
+    let mut earlier_meshed = 0;
+    if let Some(point) = &point {
+        let warm_up = |f: &FrameMetrics| f.index <= point.after_frame;
+        let warm_meshed = report.frames.iter().filter(|f| warm_up(f) && f.has_mesh());
+        earlier_meshed = point.meshed.saturating_sub(warm_meshed.count());
+        report.frames.retain(|f| !warm_up(f));
+    }
+    report.resumed = point.clone();
+    out.write_metrics(&report)?;
     if let Some(visage::Error::Interrupted) = outcome.error {
         return Err(Failure {
             code: interrupt::INTERRUPTED,
             error: anyhow::anyhow!(
                 "interrupted after {} frames: their meshes, landmarks.json and metrics.json \
-                 (status \"interrupted\") are in {}; `visage export {}` makes the other files",
+                 (status \"interrupted\") are in {}; the same command with --resume goes \
+                 on from there, `visage export {}` makes the other files",
                 outcome.frames.len(),
                 dir.display(),
                 dir.display()
@@ -539,6 +611,12 @@ fn run_face(
     }
     if !p.quiet {
         let s = &outcome.summary;
+        if let Some(point) = &point {
+            eprint!(
+                "resumed after frame {} ({} frames kept): ",
+                point.after_frame, point.frames
+            );
+        }
         eprintln!(
             "{} frames ({} meshed, {} without a face) → {}; {:.1} fps, CPU {:.2}, \
              peak RSS {:.0} MiB; landmark jitter {:.3} px, {:.2}× steadier than tracked",
@@ -553,5 +631,24 @@ fn run_face(
             s.quality.image_jitter_reduction.unwrap_or(0.0),
         );
     }
-    Ok(outcome.summary)
+    Ok(earlier_meshed + outcome.summary.solved + outcome.summary.carried)
+}
+
+/// The frames a complete run in `dir` meshed, as its `metrics.json` says (0 when it does not).
+fn meshed_in(dir: &std::path::Path) -> usize {
+    let metrics = std::fs::read(dir.join("metrics.json"))
+        .ok()
+        .and_then(|bytes| serde_json::from_slice::<serde_json::Value>(&bytes).ok())
+        .unwrap_or_default();
+    let count = |key: &str| metrics["summary"][key].as_u64().unwrap_or(0) as usize;
+    let earlier = metrics["resumed"]["meshed"].as_u64().unwrap_or(0) as usize;
+    earlier + count("solved") + count("carried")
+}
+
+fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
 }

@@ -97,6 +97,71 @@ impl Pc2Writer {
         self.samples
     }
 
+    /// Continues the unfinished cache `path` after its first `samples` frames: the file is cut
+    /// there (a frame a killed writer left half-written goes) and frames are appended.
+    ///
+    /// # Errors
+    /// `path` is not a PC2 cache or holds fewer than `samples` frames; it cannot be written.
+    pub fn append(path: &Path, samples: u32) -> Result<Pc2Writer, MeshIoError> {
+        let io = |source| MeshIoError::Io {
+            path: path.to_owned(),
+            source,
+        };
+        let bad = |reason: String| MeshIoError::Syntax {
+            path: path.to_owned(),
+            line: 0,
+            reason,
+        };
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(path)
+            .map_err(io)?;
+        let mut header = [0u8; SAMPLES_OFFSET as usize + 4];
+        std::io::Read::read_exact(&mut file, &mut header)
+            .map_err(|_| bad("not a PC2 point cache (shorter than its header)".into()))?;
+        if &header[..12] != MAGIC {
+            return Err(bad("not a PC2 point cache (no POINTCACHE2 header)".into()));
+        }
+        let points = i32::from_le_bytes([header[16], header[17], header[18], header[19]]);
+        let points =
+            usize::try_from(points).map_err(|_| bad(format!("negative count: {points} points")))?;
+        let end = header.len() as u64 + 12 * points as u64 * u64::from(samples);
+        let length = file.metadata().map_err(io)?.len();
+        if length < end {
+            return Err(bad(format!(
+                "holds {} whole frames of {points} points, not {samples}",
+                (length - header.len() as u64) / (12 * points.max(1) as u64)
+            )));
+        }
+        file.set_len(end).map_err(io)?;
+        file.seek(SeekFrom::End(0)).map_err(io)?;
+        Ok(Pc2Writer {
+            path: path.to_owned(),
+            file: BufWriter::new(file),
+            points,
+            samples,
+            buffer: Vec::with_capacity(12 * points),
+        })
+    }
+
+    /// Points per frame.
+    pub fn points(&self) -> usize {
+        self.points
+    }
+
+    /// Hands the frames written so far to the operating system (they survive the process being
+    /// killed).
+    ///
+    /// # Errors
+    /// A write failure.
+    pub fn flush(&mut self) -> Result<(), MeshIoError> {
+        self.file.flush().map_err(|source| MeshIoError::Io {
+            path: self.path.clone(),
+            source,
+        })
+    }
+
     /// Writes the sample count into the header and closes the file.
     ///
     /// # Errors
@@ -227,6 +292,33 @@ mod tests {
         std::fs::write(&path, b"not a cache").unwrap();
         let e = read_pc2(&path).unwrap_err().to_string();
         assert!(e.contains("a.pc2") && e.contains("POINTCACHE2"), "{e}");
+    }
+
+    #[test]
+    fn an_unfinished_cache_continues_after_its_whole_frames() {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = tmp.path().join("a.pc2");
+        let mut w = Pc2Writer::create(&path, 2, 0.0).unwrap();
+        for k in 0..3 {
+            w.push(&[[k as f64; 3], [0.0; 3]]).unwrap();
+        }
+        w.flush().unwrap();
+        drop(w);
+        // A killed writer: no sample count in the header, half a frame at the end.
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes.truncate(bytes.len() - 6);
+        std::fs::write(&path, &bytes).unwrap();
+        assert!(
+            Pc2Writer::append(&path, 3).is_err(),
+            "the third frame is cut"
+        );
+        let mut w = Pc2Writer::append(&path, 1).unwrap();
+        assert_eq!((w.samples(), w.points()), (1, 2));
+        w.push(&[[7.0; 3], [0.0; 3]]).unwrap();
+        w.finish().unwrap();
+        let cache = read_pc2(&path).unwrap();
+        assert_eq!(cache.samples(), 2);
+        assert_eq!((cache.sample(0)[0], cache.sample(1)[0]), (0.0, 7.0));
     }
 
     #[test]
