@@ -18,6 +18,7 @@ cd "$(dirname "$0")"
 max_len() {
     case "$1" in
         exif) echo 512 ;;
+        keypoints_json) echo 4096 ;;
         intrinsics_json | rigid_transform_json | pc2) echo 1024 ;;
         obj | ply | canonical_mesh) echo 4096 ;;
         depth_png | tflite) echo 8192 ;;

@@ -68,6 +68,17 @@ def json_files():
 # --- obj: the first byte is the fuzz target's option flags (0 = read everything). -------------
 
 
+def keypoints_json():
+    descriptor = ",".join(str((7 * i) % 256) for i in range(128))
+    keypoint = '{"x":1.5,"y":2.0,"size":3.2,"angle":90.0,"response":0.02,"octave":16711681}'
+    write("keypoints_json", "one.json",
+          '{"width":10,"height":20,"keypoints":[%s],"descriptors":[[%s]]}' % (keypoint, descriptor))
+    write("keypoints_json", "empty.json",
+          '{"width":0,"height":0,"keypoints":[],"descriptors":[]}')
+    write("keypoints_json", "short_descriptor.json",
+          '{"width":1,"height":1,"keypoints":[%s],"descriptors":[[1,2,3]]}' % keypoint)
+
+
 def obj():
     quad = ("o thing\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nv 2 0 1\n"
             "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5\n"
@@ -353,6 +364,7 @@ def tflite():
 if __name__ == "__main__":
     depth_png()
     json_files()
+    keypoints_json()
     obj()
     ply()
     pc2()

@@ -6,8 +6,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use serde::{Deserialize, Serialize};
-use visage_keypoints::{Canvas, Descriptor, Features, GrayImage, Keypoint, Sift, SiftOptions};
+use visage_keypoints::{Canvas, Features, GrayImage, KeypointsFile, Sift, SiftOptions};
 use visage_video::read_image;
 
 /// Arguments of `visage keypoints`.
@@ -62,19 +61,6 @@ impl SiftArgs {
             ..SiftOptions::default()
         }))
     }
-}
-
-/// The keypoints file.
-#[derive(Serialize, Deserialize)]
-pub struct KeypointsFile {
-    /// Image width, pixels.
-    pub width: u32,
-    /// Image height, pixels.
-    pub height: u32,
-    /// The keypoints.
-    pub keypoints: Vec<Keypoint>,
-    /// One descriptor (128 bytes) per keypoint.
-    pub descriptors: Vec<Vec<u8>>,
 }
 
 /// An image read for SIFT: its RGB pixels and grey levels.
@@ -132,12 +118,7 @@ pub fn run(args: KeypointsArgs) -> anyhow::Result<()> {
 pub const KEYPOINT_COLOUR: [u8; 3] = [0, 255, 64];
 
 fn write_keypoints(path: &Path, rgb: &image::RgbImage, features: &Features) -> anyhow::Result<()> {
-    let file = KeypointsFile {
-        width: rgb.width(),
-        height: rgb.height(),
-        keypoints: features.keypoints.clone(),
-        descriptors: features.descriptors.iter().map(|d| d.to_vec()).collect(),
-    };
+    let file = KeypointsFile::new(rgb.width(), rgb.height(), features);
     visage::write_atomically(path, |tmp| {
         std::fs::File::create(tmp)
             .and_then(|f| {
@@ -153,34 +134,10 @@ fn write_keypoints(path: &Path, rgb: &image::RgbImage, features: &Features) -> a
 }
 
 /// Reads a keypoints file written by `visage keypoints`.
-pub fn read_keypoints(path: &Path) -> anyhow::Result<(KeypointsFile, Vec<Descriptor>)> {
+pub fn read_keypoints(path: &Path) -> anyhow::Result<Features> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("{}: cannot read the keypoints", path.display()))?;
-    let file: KeypointsFile = serde_json::from_str(&text)
-        .map_err(|e| anyhow::anyhow!("{}: not a keypoints file: {e}", path.display()))?;
-    if file.descriptors.len() != file.keypoints.len() {
-        anyhow::bail!(
-            "{}: {} keypoints but {} descriptors",
-            path.display(),
-            file.keypoints.len(),
-            file.descriptors.len()
-        );
-    }
-    let descriptors = file
-        .descriptors
-        .iter()
-        .enumerate()
-        .map(|(k, d)| {
-            Descriptor::try_from(d.as_slice()).map_err(|_| {
-                anyhow::anyhow!(
-                    "{}: descriptor {k} has {} values, not 128",
-                    path.display(),
-                    d.len()
-                )
-            })
-        })
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    Ok((file, descriptors))
+    Ok(KeypointsFile::parse_json(&text, path)?)
 }
 
 /// Writes an RGB image as PNG, atomically.

@@ -140,12 +140,7 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
 /// The features of an image, or those a keypoints file holds (then without the image).
 fn features(path: &Path, sift: &mut Sift) -> anyhow::Result<(Features, Option<RgbImage>)> {
     if is_keypoints_file(path) {
-        let (file, descriptors) = read_keypoints(path)?;
-        let features = Features {
-            keypoints: file.keypoints,
-            descriptors,
-        };
-        return Ok((features, None));
+        return Ok((read_keypoints(path)?, None));
     }
     let image = load(path)?;
     Ok((sift.detect_and_compute(&image.gray), Some(image.rgb)))
