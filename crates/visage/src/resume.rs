@@ -5,8 +5,9 @@
 //! A streaming run hands every frame's outputs to the operating system before it writes the
 //! next frame's landmarks record ([`crate::OutputDir`]), so after a kill every stream holds
 //! every frame before the last landmarks record whole; that last frame may be partly written
-//! and is done again. A run that was interrupted (Ctrl-C, SIGTERM) closed its files and keeps
-//! every frame. The temporal state (the landmark smoother, the fusion's previous surface, the
+//! and is done again. A run that was interrupted (Ctrl-C, SIGTERM) closed its files, but gave
+//! its last frames out without the landmark smoother's look-ahead: those (one with the default
+//! latency) are done again too. The temporal state (the landmark smoother, the fusion's previous surface, the
 //! identity estimate) is not saved: the resumed run warms it up on the last
 //! [`WARM_UP_FRAMES`] kept frames, whose outputs are already written, before the new ones.
 //!
@@ -69,7 +70,9 @@ pub struct ResumePoint {
     pub meshed: usize,
     /// Blendshape frames kept.
     pub blendshape_frames: usize,
-    /// Frames the previous run had written, whole or in part, that are done again.
+    /// Frames the previous run had written that are done again: its last ones, which a kill
+    /// may have left partly written, or which went out without the landmark smoother's
+    /// look-ahead.
     pub redone: usize,
     /// Kept frames processed again before the resume point, their outputs not written again,
     /// so that the temporal state (the smoothers, the fusion's previous surface, the identity)
@@ -195,12 +198,10 @@ pub fn prepare_resume(dir: &Path, run: &RunDescription<'_>) -> Result<ResumeStat
         serde_json::from_slice::<LandmarksRecord>(bytes).ok()
     })?;
     // A killed or failed run may have left its last frame partly written in the other
-    // streams; an interrupted one closed every file after its last frame.
-    let whole = if status == "interrupted" || status == "complete" {
-        scan.records.len()
-    } else {
-        scan.records.len().saturating_sub(1)
-    };
+    // streams. A run that reached the end of its input gave its last frames out without the
+    // look-ahead the landmark smoother waits for (`latency_frames`). Both are done again.
+    let redo = run.parameters.latency_frames.max(1);
+    let whole = scan.records.len().saturating_sub(redo);
     if whole == 0 {
         return start_again(dir);
     }
@@ -717,8 +718,9 @@ mod tests {
         let ResumeState::Continue(point) = prepare_resume(dir, &run).unwrap() else {
             panic!("not continued");
         };
-        // A complete run's records are all whole.
-        assert_eq!(point.after_frame, 4);
+        // A complete run's records are all whole, but its last frame had no look-ahead.
+        assert_eq!(point.after_frame, 2);
+        assert_eq!(point.redone, 1);
     }
 
     #[test]

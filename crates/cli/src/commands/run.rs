@@ -490,7 +490,8 @@ fn run_face(
                     point.warm_up_frames,
                     match point.redone {
                         0 => String::new(),
-                        n => format!(" ({n} partly written frame{} done again)", plural(n)),
+                        1 => " (its last frame done again)".to_owned(),
+                        n => format!(" (its last {n} frames done again)"),
                     }
                 );
             }
@@ -643,12 +644,4 @@ fn meshed_in(dir: &std::path::Path) -> usize {
     let count = |key: &str| metrics["summary"][key].as_u64().unwrap_or(0) as usize;
     let earlier = metrics["resumed"]["meshed"].as_u64().unwrap_or(0) as usize;
     earlier + count("solved") + count("carried")
-}
-
-fn plural(n: usize) -> &'static str {
-    if n == 1 {
-        ""
-    } else {
-        "s"
-    }
 }
