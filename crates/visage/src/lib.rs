@@ -66,6 +66,7 @@ mod reconstructor;
 mod recorder;
 mod rest_pose;
 mod resume;
+mod resume_point;
 mod rigid_jitter;
 mod run_folder;
 mod shot_cut;
@@ -107,7 +108,8 @@ pub use pipeline::QUEUE_CAPACITY;
 pub use quality::{FusedAndRaw, QualitySummary};
 pub use reconstructor::{error_chain, FrameResult, Identity, Reconstructor, RunOutcome};
 pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP};
-pub use resume::{prepare_resume, ResumePoint, ResumeState, RunDescription};
+pub use resume::{prepare_resume, ResumeState};
+pub use resume_point::{ResumePoint, RunDescription, WARM_UP_FRAMES};
 pub use rigid_jitter::rigid_residual_rms;
 pub use run_folder::{
     clear_outputs, inspect as inspect_output_folder, FolderContents, FACE_FOLDER_PREFIX,

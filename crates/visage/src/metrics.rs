@@ -506,7 +506,7 @@ pub struct Report<P: Serialize> {
     /// lists the frames after the resume point; the summary covers every frame this run
     /// processed, its warm-up included.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub resumed: Option<crate::resume::ResumePoint>,
+    pub resumed: Option<crate::resume_point::ResumePoint>,
     pub mesh: MeshSummary,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub solver: Option<SolverSummary>,

@@ -20,7 +20,7 @@ use crate::animation::{BlendshapeFrame, BlendshapesJsonWriter, LiveLinkCsvWriter
 use crate::atomic_write::{tmp_path, write_atomically, write_json_atomically};
 use crate::landmarks::LandmarksFrame;
 use crate::reconstructor::Identity;
-use crate::resume::{ResumePoint, RunDescription};
+use crate::resume_point::{ResumePoint, RunDescription};
 use crate::sink::{FrameSink, MeshFrame};
 use crate::Error;
 

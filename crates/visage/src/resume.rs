@@ -11,36 +11,24 @@
 //! identity estimate) is not saved: the resumed run warms it up on the last
 //! [`WARM_UP_FRAMES`] kept frames, whose outputs are already written, before the new ones.
 //!
-//! Only a run with the same input, camera, parameters and frame selection is continued; a
-//! clip-mode run (one solve over the whole clip) and an image-plane mesh (built from the first
-//! frame's face) cannot be.
+//! Only a run with the same input, camera, parameters and `every` is continued (the frame limit
+//! may be raised: a complete run that stopped at its limit goes on); a clip-mode run (one solve
+//! over the whole clip) and an image-plane mesh (built from the first frame's face) cannot be.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
-use visage_camera::Intrinsics;
+use serde::Deserialize;
 use visage_fusion::MeshKind;
 
 use crate::animation::{BLENDSHAPES_CSV, BLENDSHAPES_JSON};
 use crate::atomic_write::tmp_path;
-use crate::config::{Parameters, TemporalMode};
-use crate::input::FrameSelection;
+use crate::config::TemporalMode;
 use crate::json_records::scan_frames;
 use crate::output::{CACHE_MATERIAL_FILE, CACHE_MESH_FILE, POINT_CACHE_FILE};
+use crate::resume_point::{ResumePoint, RunDescription, WARM_UP_FRAMES};
 use crate::run_folder::{clear_outputs, inspect};
 use crate::Error;
-
-/// What defines a run: a folder's files are continued only by the same one. Written into
-/// `metrics.json` when the run starts ([`crate::OutputDir::write_running`]).
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct RunDescription<'a> {
-    /// The input as given on the command line.
-    pub input: &'a str,
-    pub intrinsics: &'a Intrinsics,
-    pub parameters: &'a Parameters,
-    pub selection: FrameSelection,
-}
 
 /// What [`prepare_resume`] found.
 #[derive(Clone, Debug, PartialEq)]
@@ -56,47 +44,6 @@ pub enum ResumeState {
     /// Continue after [`ResumePoint::after_frame`].
     Continue(ResumePoint),
 }
-
-/// Where a resumed run continues, and what the files keep from before.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ResumePoint {
-    /// The previous run's status (`"running"`: it was killed).
-    pub previous_status: String,
-    /// Input index of the last frame kept; the run goes on with the next one.
-    pub after_frame: usize,
-    /// Frames kept (landmarks records).
-    pub frames: usize,
-    /// Of them, the meshed ones (point cache samples).
-    pub meshed: usize,
-    /// Blendshape frames kept.
-    pub blendshape_frames: usize,
-    /// Frames the previous run had written that are done again: its last ones, which a kill
-    /// may have left partly written, or which went out without the landmark smoother's
-    /// look-ahead.
-    pub redone: usize,
-    /// Kept frames processed again before the resume point, their outputs not written again,
-    /// so that the temporal state (the smoothers, the fusion's previous surface, the identity)
-    /// is warm when the new frames come: at most [`WARM_UP_FRAMES`].
-    pub warm_up_frames: usize,
-    /// The warm-up starts after this input index (`None`: at the input's start).
-    #[serde(skip)]
-    pub warm_up_after: Option<usize>,
-    /// Input indices of the frames kept.
-    #[serde(skip)]
-    pub frame_indices: Vec<usize>,
-    /// Input indices of the frames whose surfaces the point cache keeps, one per sample: the
-    /// meshed frames (every frame when the previous run had finished the cache). Empty: the
-    /// cache starts afresh.
-    #[serde(skip)]
-    pub cache_indices: Vec<usize>,
-}
-
-/// Kept frames a resumed run processes again to warm its temporal state up (10 s at 30 fps,
-/// ~3 s of work). The frame-to-frame state (the landmark smoother, the fusion's previous
-/// surface) forgets its start within ~30 frames; the clip-long estimates (the identity, the
-/// resting face the blendshapes are measured from) are taken over the warm-up instead of
-/// every frame before, which needs more frames to come close.
-pub const WARM_UP_FRAMES: usize = 300;
 
 /// Outputs a resumed run makes again from the whole sequence (the exports, the identity):
 /// removed at the resume point so that none describes only the earlier frames.
@@ -523,6 +470,9 @@ fn remove_later_plys(dir: &Path, after_frame: usize) -> Result<(), Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::Parameters;
+    use crate::input::FrameSelection;
+    use visage_camera::Intrinsics;
     use visage_fusion::{FusionParams, MeshingOptions};
 
     fn parameters(mode: TemporalMode, mesh: MeshKind) -> Parameters {

@@ -177,9 +177,10 @@ pub struct RunArgs {
     pub overwrite: bool,
     /// Continue the run in the output folder where it stopped (killed, interrupted or failed):
     /// its files are cut back to the last frame they all hold and the run goes on after it,
-    /// with the same input and options (checked). The temporal smoothing starts afresh there.
-    /// A complete run is left as it is; an empty folder gets a new run. Not with --mode clip
-    /// or --mesh image.
+    /// with the same input and options (checked; --max-frames may be raised). The temporal
+    /// state is not saved: the last 300 kept frames are processed again, not written, to warm
+    /// it up. A complete run is left as it is; an empty folder gets a new run. Not with
+    /// --mode clip or --mesh image.
     #[arg(long, conflicts_with = "overwrite")]
     pub resume: bool,
     /// Which faces to mesh: the largest in view (a warning says when there were others), or
