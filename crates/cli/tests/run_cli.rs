@@ -47,6 +47,24 @@ fn run_five_frames(clip: &Path, models: &Path, out: &Path, extra: &[&str]) {
     run_ok(&args);
 }
 
+/// Starts `visage ARGS…` and returns it once `marker` exists (failing after two minutes).
+fn spawn_until(args: &[&str], marker: &Path, stderr: std::process::Stdio) -> std::process::Child {
+    let child = Command::new(env!("CARGO_BIN_EXE_visage"))
+        .args(args)
+        .stderr(stderr)
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while !marker.exists() {
+        assert!(
+            started.elapsed().as_secs() < 120,
+            "no {marker:?} after two minutes"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    child
+}
+
 fn ply_count(dir: &Path) -> usize {
     std::fs::read_dir(dir).map_or(0, |d| {
         d.filter(|e| {
@@ -414,8 +432,8 @@ fn ctrl_c_stops_after_a_frame_and_keeps_the_work() {
     let (models, clip) = inputs();
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("out");
-    let child = Command::new(env!("CARGO_BIN_EXE_visage"))
-        .args([
+    let child = spawn_until(
+        &[
             "run",
             s(&clip),
             "--out",
@@ -423,18 +441,10 @@ fn ctrl_c_stops_after_a_frame_and_keeps_the_work() {
             "--ply",
             "--models",
             s(&models),
-        ])
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let started = std::time::Instant::now();
-    while !out.join("meshes/000003.ply").exists() {
-        assert!(
-            started.elapsed().as_secs() < 120,
-            "no mesh after two minutes"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
+        ],
+        &out.join("meshes/000003.ply"),
+        std::process::Stdio::piped(),
+    );
     let kill = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()
@@ -551,19 +561,11 @@ fn a_killed_run_resumes_where_it_stopped() {
         "--models",
         s(&models),
     ];
-    let mut child = Command::new(env!("CARGO_BIN_EXE_visage"))
-        .args(args)
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let started = std::time::Instant::now();
-    while !out.join("meshes/000008.ply").exists() {
-        assert!(
-            started.elapsed().as_secs() < 120,
-            "no mesh after two minutes"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(10));
-    }
+    let mut child = spawn_until(
+        &args,
+        &out.join("meshes/000008.ply"),
+        std::process::Stdio::null(),
+    );
     child.kill().unwrap();
     child.wait().unwrap();
     assert_eq!(json(&out.join("metrics.json"))["status"], "running");
@@ -611,8 +613,8 @@ fn a_killed_run_leaves_complete_files_and_a_rerun_must_choose() {
     let (models, clip) = inputs();
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("out");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_visage"))
-        .args([
+    let mut child = spawn_until(
+        &[
             "run",
             s(&clip),
             "--out",
@@ -620,18 +622,10 @@ fn a_killed_run_leaves_complete_files_and_a_rerun_must_choose() {
             "--ply",
             "--models",
             s(&models),
-        ])
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let started = std::time::Instant::now();
-    while !out.join("meshes/000005.ply").exists() {
-        assert!(
-            started.elapsed().as_secs() < 120,
-            "no mesh after two minutes"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
+        ],
+        &out.join("meshes/000005.ply"),
+        std::process::Stdio::null(),
+    );
     child.kill().unwrap();
     child.wait().unwrap();
     assert_eq!(json(&out.join("metrics.json"))["status"], "running");
@@ -660,12 +654,7 @@ fn a_killed_run_leaves_complete_files_and_a_rerun_must_choose() {
     assert_eq!(ply_count(&out.join("meshes")), 5, "stale meshes were left");
     assert_eq!(json(&out.join("metrics.json"))["status"], "complete");
     assert_eq!(std::fs::read(out.join("notes.txt")).unwrap(), b"mine");
-    let leftovers: Vec<_> = std::fs::read_dir(&out)
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .filter(|e| e.path().extension().is_some_and(|x| x == "tmp"))
-        .collect();
-    assert!(leftovers.is_empty(), "{leftovers:?}");
+    assert!(tmp_files(&out).is_empty(), "{:?}", tmp_files(&out));
 
     let o = visage(&[
         "run",

@@ -27,7 +27,7 @@ use crate::config::TemporalMode;
 use crate::json_records::scan_frames;
 use crate::output::{CACHE_MATERIAL_FILE, CACHE_MESH_FILE, POINT_CACHE_FILE};
 use crate::resume_point::{ResumePoint, RunDescription, WARM_UP_FRAMES};
-use crate::run_folder::{clear_outputs, inspect};
+use crate::run_folder::{clear_outputs, inspect, OUTPUT_FILES, OUTPUT_FOLDERS};
 use crate::Error;
 
 /// What [`prepare_resume`] found.
@@ -45,18 +45,23 @@ pub enum ResumeState {
     Continue(ResumePoint),
 }
 
-/// Outputs a resumed run makes again from the whole sequence (the exports, the identity):
-/// removed at the resume point so that none describes only the earlier frames.
-const REMADE_FILES: [&str; 7] = [
-    "identity.obj",
-    "identity.json",
-    "texture.png",
-    "sequence.glb",
-    "report.html",
-    "preview.mp4",
-    "export.json",
+/// The outputs a resumed run continues (the streams, cut back) or keeps. Every other file and
+/// folder of [`OUTPUT_FILES`] and [`OUTPUT_FOLDERS`] (the exports, the identity) is made again
+/// from the whole sequence, and is removed at the resume point so that none describes only the
+/// earlier frames.
+const CONTINUED: [&str; 11] = [
+    POINT_CACHE_FILE,
+    CACHE_MESH_FILE,
+    CACHE_MATERIAL_FILE,
+    "landmarks.json",
+    "metrics.json",
+    "camera.json",
+    BLENDSHAPES_CSV,
+    BLENDSHAPES_JSON,
+    "faces.json",
+    "meshes",
+    "raw",
 ];
-const REMADE_FOLDERS: [&str; 2] = ["plots", "frames"];
 
 /// Looks at the run in `dir` and, when it stopped part-way, cuts its streamed files back to
 /// the last frame they all hold whole and removes what comes after it (per-frame PLYs of
@@ -252,10 +257,10 @@ pub fn prepare_resume(dir: &Path, run: &RunDescription<'_>) -> Result<ResumeStat
     for sub in ["meshes", "raw"] {
         remove_later_plys(&dir.join(sub), after_frame)?;
     }
-    for name in REMADE_FILES {
+    for name in OUTPUT_FILES.iter().filter(|n| !CONTINUED.contains(n)) {
         remove_file_if_present(&dir.join(name))?;
     }
-    for name in REMADE_FOLDERS {
+    for name in OUTPUT_FOLDERS.iter().filter(|n| !CONTINUED.contains(n)) {
         let path = dir.join(name);
         if path.is_dir() {
             std::fs::remove_dir_all(&path).map_err(|source| Error::Write { path, source })?;
