@@ -1,0 +1,43 @@
+use std::path::PathBuf;
+
+/// Errors of the depth sources. Every variant names the file (or option) at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum DepthError {
+    /// A file could not be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A network's description file (its JSON) is not valid.
+    #[error("{}: not a valid depth network description: {reason}", path.display())]
+    Config { path: PathBuf, reason: String },
+    /// The file is not an ONNX model the runtime can read.
+    #[error("{}: not an ONNX model: {reason}", path.display())]
+    NotOnnx { path: PathBuf, reason: String },
+    /// The network uses operators the ONNX runtime does not implement.
+    #[error(
+        "{}: the network uses operators visage's ONNX runtime (tract) does not implement: {}",
+        path.display(), ops.join(", ")
+    )]
+    UnsupportedOperators { path: PathBuf, ops: Vec<String> },
+    /// The network's input or output is not what a depth network has.
+    #[error("{}: {reason}", path.display())]
+    Shape { path: PathBuf, reason: String },
+    /// The runtime failed to prepare or run the network.
+    #[error("{}: {reason}", path.display())]
+    Runtime { path: PathBuf, reason: String },
+    /// An RGB-D recording's folder or lists are not usable.
+    #[error("{}: {reason}", path.display())]
+    Recording { path: PathBuf, reason: String },
+    /// A camera file or depth image failed (the cause names the file).
+    #[error(transparent)]
+    Camera(#[from] visage_camera::CameraError),
+    /// An option outside its range.
+    #[error("{name} = {value}: {reason}")]
+    InvalidOption {
+        name: &'static str,
+        value: String,
+        reason: &'static str,
+    },
+}

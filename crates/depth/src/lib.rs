@@ -1,0 +1,29 @@
+//! Per-pixel depth from the sources users have (paper §2: "a pretrained CNN P_d … produces,
+//! for every frame, a dense depth map D_k"):
+//! - **ONNX depth networks** the user supplies ([`DepthNetwork`], run by `tract`, pure Rust),
+//!   described by a small JSON file beside them ([`NetworkConfig`]: input size, colour order,
+//!   normalisation, what the output means). Outputs known only up to a scale and shift per
+//!   frame — relative depth, inverse depth, disparity — are aligned to the metric face by a
+//!   robust fit in their own space ([`align`]).
+//! - **RGB-D recordings** ([`RgbdRecording`]): the TUM RGB-D layout or a pair of `rgb/` and
+//!   `depth/` folders, colour and depth associated by timestamp, depth registered to the
+//!   colour camera, holes and flying pixels at depth edges masked.
+//!
+//! Depth maps are [`visage_camera::DepthMap`]s in metres.
+
+#![forbid(unsafe_code)]
+
+mod alignment;
+mod depth_network;
+mod error;
+mod network_config;
+mod prediction;
+
+pub use alignment::{align, Alignment, AlignmentFailure, AlignmentOptions};
+pub use depth_network::DepthNetwork;
+pub use error::DepthError;
+pub use network_config::{
+    AlignMode, ColorOrder, InputSpec, Layout, NetworkConfig, NetworkRegion, OutputKind, OutputSpec,
+    Resize, DEFAULT_FACE_MARGIN, IMAGENET_MEAN, IMAGENET_STD,
+};
+pub use prediction::{FrameRegion, Prediction};
