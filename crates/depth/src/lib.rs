@@ -14,12 +14,16 @@
 #![forbid(unsafe_code)]
 
 mod alignment;
+mod depth_edges;
 mod depth_network;
 mod error;
 mod network_config;
 mod prediction;
+mod registration;
+mod rgbd_recording;
 
 pub use alignment::{align, Alignment, AlignmentFailure, AlignmentOptions};
+pub use depth_edges::{mask_depth_edges, EdgeMask};
 pub use depth_network::DepthNetwork;
 pub use error::DepthError;
 pub use network_config::{
@@ -27,3 +31,8 @@ pub use network_config::{
     Resize, DEFAULT_FACE_MARGIN, IMAGENET_MEAN, IMAGENET_STD,
 };
 pub use prediction::{FrameRegion, Prediction};
+pub use registration::Registration;
+pub use rgbd_recording::{
+    RgbdFrame, RgbdLayout, RgbdOptions, RgbdRecording, FOLDER_DEPTH_SCALE, MAX_TIME_DIFFERENCE_S,
+    TUM_DEPTH_SCALE,
+};
