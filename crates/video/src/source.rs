@@ -65,11 +65,14 @@ pub enum FrameSource {
     /// A video decoded by FFmpeg.
     Video(VideoReader),
     /// Image files, read one at a time; `fps` is the frame rate the caller gave
-    /// ([`FrameSource::with_frame_rate`]), which the files themselves do not state.
+    /// ([`FrameSource::with_frame_rate`]), which the files themselves do not state, and
+    /// `times` each file's capture time in seconds when a recording lists them
+    /// ([`FrameSource::timed_images`]).
     Images {
         paths: Vec<PathBuf>,
         next: usize,
         fps: Option<f64>,
+        times: Option<Vec<f64>>,
     },
 }
 
@@ -100,6 +103,7 @@ impl FrameSource {
                 paths,
                 next: 0,
                 fps: None,
+                times: None,
             });
         }
         if is_image_path(path) {
@@ -107,9 +111,40 @@ impl FrameSource {
                 paths: vec![path.to_owned()],
                 next: 0,
                 fps: None,
+                times: None,
             });
         }
         Ok(FrameSource::Video(VideoReader::open(path)?))
+    }
+
+    /// Image files in the given order with their capture times (seconds, one per file, e.g.
+    /// an RGB-D recording's list): image `i`'s timestamp is `times[i] − times[0]`. `fps` is the
+    /// recording's nominal rate, if known.
+    ///
+    /// # Errors
+    /// No files, or not one time per file.
+    pub fn timed_images(
+        paths: Vec<PathBuf>,
+        times: Vec<f64>,
+        fps: Option<f64>,
+    ) -> Result<FrameSource, VideoError> {
+        let Some(first) = paths.first() else {
+            return Err(VideoError::EmptyFolder {
+                path: PathBuf::new(),
+            });
+        };
+        if times.len() != paths.len() {
+            return Err(VideoError::Image {
+                path: first.clone(),
+                reason: format!("{} images but {} timestamps", paths.len(), times.len()),
+            });
+        }
+        Ok(FrameSource::Images {
+            paths,
+            next: 0,
+            fps: fps.filter(|f| f.is_finite() && *f > 0.0),
+            times: Some(times),
+        })
     }
 
     /// Gives images the frame rate they were taken at: image `i` is then at `i / fps`
@@ -140,11 +175,19 @@ impl Iterator for FrameSource {
     fn next(&mut self) -> Option<Self::Item> {
         match self {
             FrameSource::Video(v) => v.next(),
-            FrameSource::Images { paths, next, fps } => {
+            FrameSource::Images {
+                paths,
+                next,
+                fps,
+                times,
+            } => {
                 let path = paths.get(*next)?;
                 let index = *next;
                 *next += 1;
-                let timestamp_s = fps.map(|f| index as f64 / f);
+                let timestamp_s = match times {
+                    Some(t) => Some(t[index] - t[0]),
+                    None => fps.map(|f| index as f64 / f),
+                };
                 Some(read_image(path).map(|f| Frame {
                     index,
                     timestamp_s,

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 use visage_camera::{Intrinsics, DEFAULT_FOV_DEG};
+use visage_depth::{DepthNetwork, RgbdRecording};
 use visage_face::FaceTarget;
 use visage_fem::{ClipOptions, Weights};
 use visage_fusion::{
@@ -47,6 +48,13 @@ pub enum DepthSource {
     /// The morphable model fitted to the frame: this person's face with the frame's
     /// expression (needs the model fit).
     Model,
+    /// A depth network run on every frame (its face region by default), its output aligned
+    /// to the metric face — the fitted model's surface, or the face fit's without the model —
+    /// where it is not metric.
+    Network(Box<DepthNetwork>),
+    /// An RGB-D recording's depth maps, the one associated with each colour frame (the input
+    /// must be the recording's colour frames, in its order).
+    Recording(Box<RgbdRecording>),
 }
 
 impl DepthSource {
@@ -56,7 +64,18 @@ impl DepthSource {
             DepthSource::Face => "face".into(),
             DepthSource::Model => "model".into(),
             DepthSource::Folder(seq) => seq.dir.display().to_string(),
+            DepthSource::Network(net) => net.path().display().to_string(),
+            DepthSource::Recording(rec) => rec.dir.display().to_string(),
         }
+    }
+
+    /// Whether each frame's depth is a map read or computed for it (a folder, a network, a
+    /// recording), rather than a fitted surface.
+    pub fn is_map(&self) -> bool {
+        matches!(
+            self,
+            DepthSource::Folder(_) | DepthSource::Network(_) | DepthSource::Recording(_)
+        )
     }
 }
 
@@ -314,13 +333,11 @@ impl Builder {
 
     /// The weights: the ones given, the rest the defaults of the mesh and depth source.
     pub(crate) fn weights(&self) -> Result<Weights, Error> {
-        let defaults = match (self.mesh, &self.depth) {
+        let defaults = match (self.mesh, self.depth.is_map()) {
             (MeshKind::Image, _) => Weights::default(),
-            (MeshKind::Face, DepthSource::Folder(_)) => ANCHORED_WEIGHTS_MAP,
-            (MeshKind::Model, DepthSource::Folder(_)) => MODEL_WEIGHTS_MAP,
-            (MeshKind::Face | MeshKind::Model, DepthSource::Face | DepthSource::Model) => {
-                ANCHORED_WEIGHTS_FACE
-            }
+            (MeshKind::Face, true) => ANCHORED_WEIGHTS_MAP,
+            (MeshKind::Model, true) => MODEL_WEIGHTS_MAP,
+            (MeshKind::Face | MeshKind::Model, false) => ANCHORED_WEIGHTS_FACE,
         };
         let weights = Weights {
             lambda: self.lambda.unwrap_or(defaults.lambda),

@@ -32,6 +32,9 @@ pub enum Error {
     Solver(#[from] FemError),
     #[error(transparent)]
     Model(#[from] visage_morphable::MorphableError),
+    /// A depth network or RGB-D recording failed (the cause names the file).
+    #[error(transparent)]
+    Depth(Box<visage_depth::DepthError>),
     /// A step failed on one frame (`frame` names its source, `step` what was being done).
     #[error("{frame}: {step}")]
     Frame {
@@ -96,5 +99,11 @@ impl Error {
             Error::Frame { source, .. } => source.is_internal(),
             _ => false,
         }
+    }
+}
+
+impl From<visage_depth::DepthError> for Error {
+    fn from(e: visage_depth::DepthError) -> Self {
+        Error::Depth(Box::new(e))
     }
 }

@@ -59,7 +59,25 @@ impl Input {
     /// # Errors
     /// A missing or unreadable input, a folder without images, a file FFmpeg cannot read.
     pub fn open(path: &Path) -> Result<Input, Error> {
-        let source = FrameSource::open(path)?;
+        Input::from_source(path, FrameSource::open(path)?)
+    }
+
+    /// The colour frames of a recording (`path`, e.g. an RGB-D folder): `paths` in this order
+    /// with their capture `times` in seconds (the frames' timestamps count from the first),
+    /// `fps` the recording's nominal rate.
+    ///
+    /// # Errors
+    /// No images, not one time per image, an unreadable first image.
+    pub fn timed_images(
+        path: &Path,
+        paths: Vec<PathBuf>,
+        times: Vec<f64>,
+        fps: Option<f64>,
+    ) -> Result<Input, Error> {
+        Input::from_source(path, FrameSource::timed_images(paths, times, fps)?)
+    }
+
+    fn from_source(path: &Path, source: FrameSource) -> Result<Input, Error> {
         let (width, height, frame_count) = match &source {
             FrameSource::Video(reader) => {
                 let info = reader.info();

@@ -48,6 +48,7 @@ mod animation;
 mod atomic_write;
 mod config;
 mod depth_folder;
+mod depth_stage;
 mod error;
 mod gaze;
 mod histogram;
@@ -97,8 +98,9 @@ pub use landmark_smoothing::{
 };
 pub use landmarks::{FaceRecord, LandmarksFrame, PoseRecord};
 pub use metrics::{
-    FrameMetrics, FrameQuality, FrameStatus, KeypointMotionSummary, MeshSummary, Percentiles,
-    PoseMetrics, Report, RunStatus, RunSummary, RunTiming, SolverSummary, StageTimes,
+    DepthAlignmentMetrics, DepthAlignmentSummary, FrameMetrics, FrameQuality, FrameStatus,
+    KeypointMotionSummary, MeshSummary, Percentiles, PoseMetrics, Report, RunStatus, RunSummary,
+    RunTiming, SolverSummary, StageTimes,
 };
 pub use output::{
     camera_to_y_up, OutputDir, CACHE_MATERIAL, CACHE_MATERIAL_FILE, CACHE_MESH_FILE,
@@ -120,6 +122,10 @@ pub use sink::{FrameSink, MeshFrame};
 pub use stages::Surfaces;
 
 pub use visage_camera::{DepthKind, Intrinsics, RigidTransform, DEFAULT_FOV_DEG};
+pub use visage_depth::{
+    AlignMode, DepthNetwork, EdgeMask, NetworkConfig, NetworkRegion, OutputKind, Registration,
+    RgbdLayout, RgbdOptions, RgbdRecording,
+};
 pub use visage_face::FaceTarget;
 pub use visage_fem::{ClipOptions, Weights};
 pub use visage_fusion::{DepthSequence, MeshKind, MeshingOptions, DEFAULT_MAX_DEPTH_M};

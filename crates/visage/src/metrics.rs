@@ -74,7 +74,8 @@ pub struct StageTimes {
     pub track: f64,
     /// Metric face fit (pose + metric landmarks).
     pub fit: f64,
-    /// Depth map: a depth folder's PNG read, or the image mesh's face rasterisation (the face
+    /// Depth map: a depth folder's or recording's PNG read (edges masked, registered), a depth
+    /// network's inference and alignment, or the image mesh's face rasterisation (the face
     /// mesh on the face fit's surface intersects that surface inside the fusion: 0).
     pub depth: f64,
     /// Fusion: right-hand side, solve, curvature and roughness figures (clip mode: plus the
@@ -183,6 +184,102 @@ pub struct FrameMetrics {
     /// on, from a face's second frame).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub keypoint_motion: Option<KeypointMotionMetrics>,
+    /// A depth network's output brought to the metric face (with `--depth MODEL.onnx`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub depth_alignment: Option<DepthAlignmentMetrics>,
+}
+
+/// One frame's alignment of a depth network's output to the fitted face (`metrics.json`):
+/// `y = scale · output + shift` in the output's space (depth, or inverse depth for inverse
+/// depth and disparity outputs).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DepthAlignmentMetrics {
+    /// Face pixels compared, and of those the ones that agree with the fit.
+    pub samples: usize,
+    pub inliers: usize,
+    /// RMS depth difference from the fitted face over the inliers, millimetres.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub residual_mm: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shift: Option<f64>,
+    /// Why the output was not used for this frame (it then has no depth: the surface is
+    /// carried).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
+}
+
+impl DepthAlignmentMetrics {
+    pub(crate) fn aligned(fit: &visage_depth::Alignment) -> Self {
+        DepthAlignmentMetrics {
+            samples: fit.samples,
+            inliers: fit.inliers,
+            residual_mm: Some(fit.residual_m * 1e3),
+            scale: Some(fit.scale),
+            shift: Some(fit.shift),
+            failure: None,
+        }
+    }
+
+    pub(crate) fn failed(failure: &visage_depth::AlignmentFailure) -> Self {
+        let (samples, inliers) = match failure {
+            visage_depth::AlignmentFailure::TooFewSamples { found, .. } => (*found, 0),
+            visage_depth::AlignmentFailure::NoConsensus { inliers, samples } => {
+                (*samples, *inliers)
+            }
+            visage_depth::AlignmentFailure::Inverted { .. } => (0, 0),
+        };
+        DepthAlignmentMetrics {
+            samples,
+            inliers,
+            residual_mm: None,
+            scale: None,
+            shift: None,
+            failure: Some(failure.to_string()),
+        }
+    }
+}
+
+/// A depth network's alignment over a run.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct DepthAlignmentSummary {
+    /// Frames the network ran on, and of those the ones whose output could not be aligned.
+    pub frames: usize,
+    pub failed: usize,
+    /// Median and 95th percentile of the per-frame residual (mm) over the aligned frames.
+    pub median_residual_mm: f64,
+    pub p95_residual_mm: f64,
+    /// Median fraction of the compared face pixels that agree with the fit.
+    pub median_inlier_fraction: f64,
+}
+
+impl DepthAlignmentSummary {
+    /// The summary of `frames`' records (`None` when no frame has one).
+    pub fn of(frames: &[FrameMetrics]) -> Option<Self> {
+        let records: Vec<&DepthAlignmentMetrics> = frames
+            .iter()
+            .filter_map(|f| f.depth_alignment.as_ref())
+            .collect();
+        if records.is_empty() {
+            return None;
+        }
+        let residual = Percentiles::of(records.iter().filter_map(|r| r.residual_mm).collect());
+        let fraction = Percentiles::of(
+            records
+                .iter()
+                .filter(|r| r.failure.is_none())
+                .map(|r| r.inliers as f64 / r.samples.max(1) as f64)
+                .collect(),
+        );
+        Some(DepthAlignmentSummary {
+            frames: records.len(),
+            failed: records.iter().filter(|r| r.failure.is_some()).count(),
+            median_residual_mm: residual.median_ms,
+            p95_residual_mm: residual.p95_ms,
+            median_inlier_fraction: fraction.median_ms,
+        })
+    }
 }
 
 impl FrameMetrics {
@@ -207,6 +304,7 @@ impl FrameMetrics {
             model_fit_px: None,
             fairing_iterations: None,
             keypoint_motion: None,
+            depth_alignment: None,
         }
     }
 
@@ -304,6 +402,9 @@ pub struct RunSummary {
     /// The keypoint check of the head's motion over the run (with keypoints on).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub keypoint_motion: Option<KeypointMotionSummary>,
+    /// A depth network's alignment to the fitted face over the run (with a network).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub depth_alignment: Option<DepthAlignmentSummary>,
 }
 
 /// The keypoint check over a run: how often it could estimate the motion and how far that
@@ -434,6 +535,7 @@ impl RunSummary {
             mean_roughness: mean(&|f| f.quality.roughness),
             quality,
             keypoint_motion: KeypointMotionSummary::of(frames),
+            depth_alignment: DepthAlignmentSummary::of(frames),
         }
     }
 }

@@ -1,13 +1,13 @@
-//! The staged whole-clip run ([`crate::Reconstructor::run`]): five stages on their own
+//! The staged whole-clip run ([`crate::Reconstructor::run`]): six stages on their own
 //! threads, joined by bounded queues ([`QUEUE_CAPACITY`] frames each), and the sink on the
 //! calling thread, frames in input order:
 //!
 //! ```text
 //! decode ──► track + landmarks + rigid fit ──► eyes + model fit ──► keypoint check
-//!        ──► depth + fuse ──► sink
+//!        ──► depth maps (folder, recording, network) ──► fuse ──► sink
 //! ```
 //!
-//! (The keypoint check passes frames straight on unless it is on.)
+//! (The keypoint check and the depth maps pass frames straight on unless they are on.)
 //!
 //! Memory is flat in the clip length in streaming mode: at most `QUEUE_CAPACITY` frames wait
 //! in each queue (and the landmark smoother's latency in the face stage), surface buffers travel back from the sink to the fusion for reuse, and the
@@ -31,6 +31,7 @@ use visage_morphable::FaceFitter;
 use visage_video::Frame;
 
 use crate::animation::BlendshapeFrame;
+use crate::depth_stage::DepthStage;
 use crate::input::Decoded;
 use crate::keypoint_motion::KeypointMotion;
 use crate::landmarks::LandmarksFrame;
@@ -70,6 +71,7 @@ pub(crate) struct Stages {
     pub face: FaceStage,
     pub model: Option<ModelStage>,
     pub keypoints: Option<KeypointMotion>,
+    pub depth: Option<DepthStage>,
     pub fuse: FuseStage,
     pub mode: TemporalMode,
     pub clip: ClipOptions,
@@ -90,6 +92,7 @@ pub(crate) fn run_stages(
         mut face,
         mut model,
         mut keypoints,
+        mut depth,
         mut fuse,
         mode,
         clip,
@@ -98,7 +101,8 @@ pub(crate) fn run_stages(
     let (decoded_tx, decoded_rx) = sync_channel::<Decoded>(QUEUE_CAPACITY);
     let (tracked_tx, tracked_rx) = sync_channel::<(Tracked, Frame)>(QUEUE_CAPACITY);
     let (modelled_tx, modelled_rx) = sync_channel::<(Tracked, Option<Frame>)>(QUEUE_CAPACITY);
-    let (checked_tx, checked_rx) = sync_channel::<Tracked>(QUEUE_CAPACITY);
+    let (checked_tx, checked_rx) = sync_channel::<(Tracked, Option<Frame>)>(QUEUE_CAPACITY);
+    let (depth_tx, depth_rx) = sync_channel::<Tracked>(QUEUE_CAPACITY);
     let (fused_tx, fused_rx) = sync_channel::<ToSink>(QUEUE_CAPACITY);
     let (recycle_tx, recycle_rx) = sync_channel::<Box<Surfaces>>(2 * QUEUE_CAPACITY + 2);
     let mut consumer = Consumer {
@@ -115,13 +119,17 @@ pub(crate) fn run_stages(
         let face = &mut face;
         let track = scope.spawn(move || track_stage(face, decoded_rx, tracked_tx));
         let model = &mut model;
-        let keep_frames = keypoints.is_some();
+        let depth_images = depth.as_ref().is_some_and(DepthStage::needs_image);
+        let keep_frames = keypoints.is_some() || depth_images;
         let modelling =
             scope.spawn(move || model_stage(model, keep_frames, tracked_rx, modelled_tx));
         let keypoints = &mut keypoints;
-        let checking = scope.spawn(move || keypoint_stage(keypoints, modelled_rx, checked_tx));
-        let fusion = scope
-            .spawn(move || fuse_stage(&mut fuse, mode, &clip, checked_rx, fused_tx, recycle_rx));
+        let checking =
+            scope.spawn(move || keypoint_stage(keypoints, depth_images, modelled_rx, checked_tx));
+        let depth = &mut depth;
+        let depth_maps = scope.spawn(move || depth_stage(depth, checked_rx, depth_tx));
+        let fusion =
+            scope.spawn(move || fuse_stage(&mut fuse, mode, &clip, depth_rx, fused_tx, recycle_rx));
         let sink_error = consumer.run(fused_rx, recycle_tx).err();
         let join = |h: std::thread::ScopedJoinHandle<'_, Result<(), Error>>, name| {
             h.join().unwrap_or(Err(Error::Panic(name))).err()
@@ -132,6 +140,7 @@ pub(crate) fn run_stages(
                 join(track, "tracking"),
                 join(modelling, "model"),
                 join(checking, "keypoints"),
+                join(depth_maps, "depth"),
                 join(fusion, "fusion"),
             ],
             sink_error,
@@ -196,15 +205,35 @@ fn model_stage(
 }
 
 /// The keypoint check, on its own thread (it costs about as much as the model fit); without
-/// it, a pass-through.
+/// it, a pass-through. The frame goes on only when `keep_frames` (a depth network needs it).
 fn keypoint_stage(
     keypoints: &mut Option<KeypointMotion>,
+    keep_frames: bool,
+    input: Receiver<(Tracked, Option<Frame>)>,
+    out: SyncSender<(Tracked, Option<Frame>)>,
+) -> Result<(), Error> {
+    for (mut tracked, frame) in input {
+        if let (Some(keypoints), Some(frame)) = (keypoints.as_mut(), &frame) {
+            keypoints.observe(&frame.image, &mut tracked);
+        }
+        let frame = frame.filter(|_| keep_frames);
+        if out.send((tracked, frame)).is_err() {
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
+/// The depth maps from outside the face fit, on their own thread (a depth network is the
+/// costliest stage); without them, a pass-through.
+fn depth_stage(
+    depth: &mut Option<DepthStage>,
     input: Receiver<(Tracked, Option<Frame>)>,
     out: SyncSender<Tracked>,
 ) -> Result<(), Error> {
     for (mut tracked, frame) in input {
-        if let (Some(keypoints), Some(frame)) = (keypoints.as_mut(), frame) {
-            keypoints.observe(&frame.image, &mut tracked);
+        if let Some(depth) = depth.as_mut() {
+            depth.acquire(frame.as_ref().map(|f| &f.image), &mut tracked)?;
         }
         if out.send(tracked).is_err() {
             return Ok(());

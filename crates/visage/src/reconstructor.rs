@@ -14,6 +14,7 @@ use visage_video::Frame;
 
 use crate::animation::{BlendshapeFrame, IctToArkit};
 use crate::config::{Builder, ModelSource, Parameters};
+use crate::depth_stage::{DepthStage, MapSource, NetworkDepth};
 use crate::keypoint_motion::KeypointMotion;
 use crate::landmark_smoothing::{
     DistanceSmoother, LandmarkSmoother, CLIP_LATENCY_FRAMES, DEFAULT_DISTANCE_SMOOTHING,
@@ -25,7 +26,7 @@ use crate::pipeline::{run_stages, Stages};
 use crate::recorder::Recorder;
 use crate::rest_pose::RestPose;
 use crate::shot_cut::CutDetector;
-use crate::stages::{FaceStage, FuseStage, ModelStage, Surfaces};
+use crate::stages::{FaceStage, FuseStage, FusedDepth, ModelStage, Surfaces};
 use crate::{DepthSource, Error, FrameSink, Input, TemporalMode};
 
 /// The video pipeline: face tracking, landmarks and the metric face fit, depth, and fusion into
@@ -42,6 +43,8 @@ pub struct Reconstructor {
     model_stage: Option<ModelStage>,
     /// The keypoint check of the head's motion, when on.
     keypoints: Option<KeypointMotion>,
+    /// The depth maps from outside the face fit, when the depth source gives them.
+    depth: Option<DepthStage>,
     setup_ms: f64,
     recorder: Recorder,
     /// The last frame's results (reused buffers).
@@ -271,8 +274,31 @@ impl Reconstructor {
             iris,
             rest: builder.rest_pose.then(|| RestPose::new(m)),
             weights: Vec::with_capacity(m.expressions.len()),
-            surface: uses_model.then(|| Arc::clone(m)),
+            // A depth network is aligned to the fitted model's surface.
+            surface: (uses_model || matches!(builder.depth, DepthSource::Network(_)))
+                .then(|| Arc::clone(m)),
             lids: LidGate::default(),
+        });
+        let fused_depth = match &builder.depth {
+            DepthSource::Face => FusedDepth::Face,
+            DepthSource::Model => FusedDepth::Model,
+            _ => FusedDepth::Maps,
+        };
+        let map_source = match builder.depth {
+            DepthSource::Face | DepthSource::Model => None,
+            DepthSource::Folder(seq) => Some(MapSource::Folder(seq)),
+            DepthSource::Recording(rec) => Some(MapSource::Recording(rec)),
+            DepthSource::Network(network) => Some(MapSource::Network(Box::new(NetworkDepth {
+                network: *network,
+                canonical: Arc::clone(&canonical),
+                model_mesh: model_mesh.clone(),
+                options: visage_depth::AlignmentOptions::default(),
+            }))),
+        };
+        let depth = map_source.map(|source| DepthStage {
+            k,
+            source,
+            max_depth: params.max_depth_m,
         });
         let mut mesh = TriMesh::new(Vec::new(), Vec::new());
         if let Some(t) = fusion.triangles() {
@@ -297,10 +323,11 @@ impl Reconstructor {
             keypoints: builder
                 .keypoint_motion
                 .then(|| KeypointMotion::new(k, Arc::clone(&canonical))),
+            depth,
             fuse: FuseStage {
                 k,
                 canonical,
-                depth: builder.depth,
+                depth: fused_depth,
                 fusion,
                 model_mesh,
             },
@@ -355,6 +382,9 @@ impl Reconstructor {
         if let Some(keypoints) = &mut self.keypoints {
             keypoints.observe(&frame.image, &mut tracked);
         }
+        if let Some(depth) = &mut self.depth {
+            depth.acquire(Some(&frame.image), &mut tracked)?;
+        }
         self.fuse.fuse(&mut tracked)?;
         let has_mesh = tracked.metrics.has_mesh();
         let position = self.recorder.push(tracked.metrics);
@@ -405,6 +435,7 @@ impl Reconstructor {
             model,
             model_stage,
             keypoints,
+            depth,
             ..
         } = self;
         let k = face.k;
@@ -414,6 +445,7 @@ impl Reconstructor {
             face,
             model: model_stage,
             keypoints,
+            depth,
             fuse,
             mode,
             clip,

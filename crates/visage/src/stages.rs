@@ -30,7 +30,7 @@ use crate::lid_gate::LidGate;
 use crate::metrics::{FrameMetrics, FrameQuality, FrameStatus, PoseMetrics};
 use crate::rest_pose::{lips_closed, RestPose};
 use crate::shot_cut::{face_jumped, CutDetector};
-use crate::{DepthSource, Error};
+use crate::Error;
 
 /// A face found and fitted in a frame.
 pub(crate) struct TrackedFace {
@@ -59,6 +59,9 @@ pub(crate) struct Tracked {
     pub model: Option<FittedModel>,
     /// The frame starts a new shot: the temporal terms restart here.
     pub cut: bool,
+    /// The frame's depth map from outside the face fit ([`crate::depth_stage`]), when the
+    /// depth source gives one.
+    pub depth_map: Option<DepthMap>,
 }
 
 /// The morphable model fitted to a frame, as a surface.
@@ -413,6 +416,7 @@ impl FaceStage {
             blendshapes: None,
             model: None,
             cut,
+            depth_map: None,
         };
         (tracked, frame)
     }
@@ -434,11 +438,22 @@ pub struct Surfaces {
     pub landmarks_px: Vec<[f64; 2]>,
 }
 
+/// Which depth the fusion fuses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum FusedDepth {
+    /// The rigid face fit's surface.
+    Face,
+    /// The fitted morphable model's surface.
+    Model,
+    /// Each frame's map ([`Tracked::depth_map`]).
+    Maps,
+}
+
 /// Depth and fusion.
 pub(crate) struct FuseStage {
     pub k: Intrinsics,
     pub canonical: Arc<CanonicalMesh>,
-    pub depth: DepthSource,
+    pub depth: FusedDepth,
     pub fusion: SurfaceFusion,
     /// The fitted model's mesh (its vertices rewritten per frame), to render its depth for the
     /// other meshes.
@@ -459,13 +474,10 @@ impl FuseStage {
         metrics.pose = Some(PoseMetrics::of(&face.geometry.pose));
         metrics.fit_rms_px = Some(face.geometry.rms_px);
         let start = Instant::now();
-        let given_map = match (&self.depth, self.fusion.mesh(), &tracked.model) {
-            (DepthSource::Folder(seq), _, _) => Some(
-                read_depth(seq, metrics.index, &self.k)
-                    .map_err(|e| Error::on_frame(&metrics.source, "depth", e))?,
-            ),
+        let given_map = match (self.depth, self.fusion.mesh(), &tracked.model) {
+            (FusedDepth::Maps, _, _) => tracked.depth_map.take(),
             // The model mesh samples the fitted surface at its own vertices.
-            (DepthSource::Model, MeshKind::Face | MeshKind::Image, Some(model)) => {
+            (FusedDepth::Model, MeshKind::Face | MeshKind::Image, Some(model)) => {
                 self.model_mesh.vertices.clone_from(&model.camera);
                 Some(
                     render_surface_depth(&self.model_mesh, &self.k, DepthKind::Z)
@@ -479,7 +491,7 @@ impl FuseStage {
         let face_depth_as_map = given_map.is_none()
             && match self.fusion.mesh() {
                 MeshKind::Image => true,
-                MeshKind::Model => matches!(self.depth, DepthSource::Face),
+                MeshKind::Model => self.depth == FusedDepth::Face,
                 MeshKind::Face => false,
             };
         let rendered = if face_depth_as_map || self.fusion.needs_face_mask() {
@@ -495,7 +507,7 @@ impl FuseStage {
         } else {
             None
         };
-        metrics.ms.depth = start.elapsed().as_secs_f64() * 1e3;
+        metrics.ms.depth += start.elapsed().as_secs_f64() * 1e3;
         let depth_map = given_map
             .as_ref()
             .or(rendered.as_ref().filter(|_| face_depth_as_map));
@@ -547,22 +559,4 @@ impl FuseStage {
     pub fn clip_frame(&self, landmarks_px: &[[f64; 2]]) -> ClipFrame {
         self.fusion.clip_frame(landmarks_px)
     }
-}
-
-fn read_depth(
-    seq: &visage_fusion::DepthSequence,
-    index: usize,
-    k: &Intrinsics,
-) -> Result<DepthMap, Error> {
-    if index >= seq.frames.len() {
-        return Err(Error::MissingDepth {
-            dir: seq.dir.clone(),
-            frames: seq.frames.len(),
-            index,
-        });
-    }
-    let map = seq.read(index)?;
-    k.check_size(map.width, map.height)
-        .map_err(|e| Error::on_frame(&seq.frames[index].display().to_string(), "depth frame", e))?;
-    Ok(map)
 }

@@ -23,8 +23,8 @@ pub struct BenchArgs {
 /// Runs `visage bench`.
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let p = &args.pipeline;
-    std::fs::metadata(&p.input)
-        .with_context(|| format!("{}: cannot read the input", p.input.display()))?;
+    std::fs::metadata(p.input_path())
+        .with_context(|| format!("{}: cannot read the input", p.input_path().display()))?;
     let (input, reconstructor) = p.open()?;
     let bar = p.progress(&input);
     // Ctrl-C ends the input; the figures cover the frames so far.
@@ -39,7 +39,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     }
     let s = &outcome.summary;
     let doc = json!({
-        "input": p.input.display().to_string(),
+        "input": p.input_path().display().to_string(),
         "width": outcome.intrinsics.width,
         "height": outcome.intrinsics.height,
         "parameters": outcome.parameters,
@@ -57,6 +57,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         "stages_ms": s.stages,
         "quality": s.quality,
         "keypoint_motion": s.keypoint_motion,
+        "depth_alignment": s.depth_alignment,
     });
     let text = serde_json::to_string_pretty(&doc)?;
     println!("{text}");

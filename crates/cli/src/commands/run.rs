@@ -13,10 +13,11 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use indicatif::ProgressBar;
 use visage::{
-    BlendshapeFrame, Camera, DepthKind, DepthSequence, DepthSource, FaceTarget, FrameMetrics,
-    FrameSink, Input, Intrinsics, KeptFrames, LandmarksFrame, MeshFrame, MeshKind, ModelSource,
-    OutputDir, PlyFormat, Reconstructor, ResumeState, RunDescription, TemporalMode,
-    DEFAULT_SUBDIVISION,
+    BlendshapeFrame, Camera, DepthKind, DepthNetwork, DepthSequence, DepthSource, EdgeMask,
+    FaceTarget, FrameMetrics, FrameSink, Input, Intrinsics, KeptFrames, LandmarksFrame, MeshFrame,
+    MeshKind, ModelSource, NetworkConfig, OutputDir, PlyFormat, Reconstructor, Registration,
+    ResumeState, RgbdLayout, RgbdOptions, RgbdRecording, RigidTransform, RunDescription,
+    TemporalMode, DEFAULT_SUBDIVISION,
 };
 
 use std::sync::atomic::Ordering;
@@ -76,8 +77,37 @@ impl std::fmt::Display for SmoothingArg {
 /// The options `visage run` and `visage bench` share.
 #[derive(Args, Debug)]
 pub struct PipelineArgs {
-    /// A video file (decoded by FFmpeg), a folder of images (name order) or one image.
-    pub input: PathBuf,
+    /// A video file (decoded by FFmpeg), a folder of images (name order) or one image (with
+    /// --rgbd: omitted, the recording's colour frames are the input).
+    #[arg(required_unless_present = "rgbd", conflicts_with = "rgbd")]
+    pub input: Option<PathBuf>,
+    /// An RGB-D recording as the input: the TUM RGB-D layout (rgb.txt, depth.txt; depth PNGs
+    /// at 5000 per metre) or the folders rgb/ and depth/ (16-bit PNG depth in millimetres;
+    /// file names that are numbers are timestamps in seconds, else the two pair in name
+    /// order). Colour and depth are associated by timestamp (within 20 ms), each colour frame
+    /// fused with its depth map; flying pixels at depth edges and hole rims are masked.
+    /// Without --intrinsics a TUM recording gets its dataset's default camera (525 px, centre
+    /// 319.5, 239.5).
+    #[arg(long, value_name = "DIR", conflicts_with = "depth")]
+    pub rgbd: Option<PathBuf>,
+    /// Depth units per metre of depth PNGs (default: 5000 for a TUM recording, else 1000).
+    #[arg(long, value_name = "UNITS")]
+    pub depth_scale: Option<f64>,
+    /// With --rgbd: the depth camera's intrinsics JSON; the depth is then registered to the
+    /// colour camera (--intrinsics), moved by --depth-to-color.
+    #[arg(long, value_name = "FILE", requires = "rgbd", requires = "intrinsics")]
+    pub depth_intrinsics: Option<PathBuf>,
+    /// With --depth-intrinsics: the rigid motion from depth to colour camera coordinates
+    /// ({"rotation": [[…], […], […]], "translation": [x, y, z]}, metres; default none).
+    #[arg(long, value_name = "FILE", requires = "depth_intrinsics")]
+    pub depth_to_color: Option<PathBuf>,
+    /// With --rgbd: use every depth value, flying pixels and hole rims included.
+    #[arg(long, requires = "rgbd")]
+    pub keep_depth_edges: bool,
+    /// With --depth MODEL.onnx: the network's description (JSON) when it is not MODEL.json
+    /// beside the network.
+    #[arg(long, value_name = "FILE")]
+    pub depth_config: Option<PathBuf>,
     /// Camera intrinsics JSON ({"width","height","fx","fy","cx","cy"}) for the input's size.
     #[arg(long, conflicts_with = "fov_deg")]
     pub intrinsics: Option<PathBuf>,
@@ -86,8 +116,11 @@ pub struct PipelineArgs {
     #[arg(long)]
     pub fov_deg: Option<f64>,
     /// Depth source: `face` (the metric face fit's surface), `model` (the fitted face
-    /// model's surface) or a folder of 16-bit PNG depth maps (millimetres, z), the i-th
-    /// file for input frame i.
+    /// model's surface), a depth network (`MODEL.onnx`, described by MODEL.json beside it or
+    /// --depth-config: input size, colour order, normalisation, and whether it gives metric
+    /// depth, relative depth, inverse depth or disparity; outputs that are not metric are
+    /// aligned to the fitted face every frame), or a folder of 16-bit PNG depth maps
+    /// (millimetres, z; see --depth-scale), the i-th file for input frame i.
     #[arg(long, default_value = "face")]
     pub depth: String,
     /// Smoothness weight λ (face and model meshes: mm⁴ of the template face, default 1
@@ -238,32 +271,126 @@ impl PipelineArgs {
         self.open_for(FaceTarget::Largest)
     }
 
+    /// The input's path: the video, folder or image, or the RGB-D recording.
+    pub fn input_path(&self) -> &std::path::Path {
+        match (&self.rgbd, &self.input) {
+            (Some(dir), _) | (None, Some(dir)) => dir,
+            (None, None) => unreachable!("clap requires the input or --rgbd"),
+        }
+    }
+
     /// The input, frame selection applied.
     pub fn open_input(&self) -> anyhow::Result<Input> {
-        let mut input = Input::open(&self.input)?.every(self.every)?;
+        Ok(self.open_input_and_recording(None)?.0)
+    }
+
+    /// The input (frame selection applied) and, with --rgbd, its recording (`color`: the
+    /// colour camera, for the registration).
+    fn open_input_and_recording(
+        &self,
+        color: Option<Intrinsics>,
+    ) -> anyhow::Result<(Input, Option<RgbdRecording>)> {
+        let (mut input, recording) = match &self.rgbd {
+            None => (Input::open(self.input_path())?, None),
+            Some(dir) => {
+                let recording = self.open_recording(dir, color)?;
+                let paths: Vec<PathBuf> =
+                    recording.frames.iter().map(|f| f.color.clone()).collect();
+                let times: Option<Vec<f64>> = recording.frames.iter().map(|f| f.time_s).collect();
+                let input = match times {
+                    Some(times) => Input::timed_images(dir, paths, times, recording.frame_rate())?,
+                    // Untimed folder pairs go in name order, as rgb/ lists them.
+                    None => Input::open(&dir.join("rgb"))?,
+                };
+                (input, Some(recording))
+            }
+        };
+        input = input.every(self.every)?;
         if let Some(m) = self.max_frames {
             input = input.max_frames(m)?;
         }
-        Ok(input)
+        Ok((input, recording))
+    }
+
+    /// The RGB-D recording in `dir`, registered to `color` when --depth-intrinsics is given.
+    fn open_recording(
+        &self,
+        dir: &std::path::Path,
+        color: Option<Intrinsics>,
+    ) -> anyhow::Result<RgbdRecording> {
+        let registration = match (&self.depth_intrinsics, color) {
+            (Some(path), Some(color)) => Some(Registration {
+                depth: Intrinsics::load_json(path)?,
+                color,
+                depth_to_color: match &self.depth_to_color {
+                    Some(t) => RigidTransform::load_json(t)?,
+                    None => RigidTransform::IDENTITY,
+                },
+            }),
+            _ => None,
+        };
+        let options = RgbdOptions {
+            depth_scale: self.depth_scale,
+            registration,
+            edges: (!self.keep_depth_edges).then(EdgeMask::default),
+            ..RgbdOptions::default()
+        };
+        let recording = RgbdRecording::open(dir, &options).context("cannot use --rgbd")?;
+        if !self.quiet {
+            eprintln!(
+                "{}: {} recording, {} colour frames, {} with a depth map within {:.0} ms{}",
+                dir.display(),
+                match recording.layout {
+                    RgbdLayout::Tum => "TUM RGB-D",
+                    RgbdLayout::Folders => "rgb/ + depth/",
+                },
+                recording.frames.len(),
+                recording.associated(),
+                options.max_time_difference_s * 1e3,
+                match recording.unmatched_depth {
+                    0 => String::new(),
+                    n => format!(" ({n} depth maps matched no colour frame)"),
+                }
+            );
+        }
+        Ok(recording)
     }
 
     /// [`PipelineArgs::open`] for a run that follows `target`.
     pub fn open_for(&self, target: FaceTarget) -> anyhow::Result<(Input, Reconstructor)> {
-        let input = self.open_input()?;
+        let given = self
+            .intrinsics
+            .as_ref()
+            .map(|path| Intrinsics::load_json(path))
+            .transpose()?;
+        let (input, recording) = self.open_input_and_recording(given)?;
         let camera = match (&self.intrinsics, self.fov_deg) {
             (Some(path), _) => {
-                let k = Intrinsics::load_json(path)?;
+                let k = given.expect("loaded above");
                 let (w, h) = input.size();
                 k.check_size(w, h).with_context(|| {
                     format!(
                         "{}: intrinsics are for another image size than {} ({w}×{h})",
                         path.display(),
-                        self.input.display()
+                        self.input_path().display()
                     )
                 })?;
                 Camera::Intrinsics(k)
             }
             (None, Some(fov)) => Camera::FovDeg(fov),
+            (None, None)
+                if recording
+                    .as_ref()
+                    .is_some_and(|r| r.layout == RgbdLayout::Tum)
+                    && input.size() == (640, 480) =>
+            {
+                eprintln!(
+                    "intrinsics: the TUM RGB-D default camera (fx = fy = 525, cx = 319.5, \
+                     cy = 239.5; the freiburg calibrations differ by up to 1.5 %); pass \
+                     --intrinsics for yours"
+                );
+                Camera::Intrinsics(Intrinsics::new(640, 480, 525.0, 525.0, 319.5, 239.5)?)
+            }
             (None, None) => {
                 if let Some((path, f35)) = input.exif_focal_35mm() {
                     eprintln!(
@@ -274,12 +401,46 @@ impl PipelineArgs {
                 Camera::Auto
             }
         };
-        let depth = match self.depth.as_str() {
-            "face" => DepthSource::Face,
-            "model" => DepthSource::Model,
-            dir => DepthSource::Folder(
-                DepthSequence::open(dir.as_ref(), 1000.0, DepthKind::Z)
-                    .context("cannot use --depth")?,
+        let depth = match (recording, self.depth.as_str()) {
+            (Some(recording), _) => DepthSource::Recording(Box::new(recording)),
+            (None, "face") => DepthSource::Face,
+            (None, "model") => DepthSource::Model,
+            (None, network) if network.to_ascii_lowercase().ends_with(".onnx") => {
+                let config = self
+                    .depth_config
+                    .as_ref()
+                    .map(|path| NetworkConfig::load(path))
+                    .transpose()?;
+                let net =
+                    DepthNetwork::load(network.as_ref(), config).context("cannot use --depth")?;
+                if !self.quiet {
+                    let (iw, ih) = net.input_size();
+                    let (ow, oh) = net.output_size();
+                    let c = net.config();
+                    eprintln!(
+                        "depth network {network}: {iw}×{ih} in, {ow}×{oh} {} out, on the {}, \
+                         aligned {}",
+                        format!("{:?}", c.output.kind).to_lowercase(),
+                        match c.region {
+                            visage::NetworkRegion::Face => "face",
+                            visage::NetworkRegion::Frame => "whole frame",
+                        },
+                        match c.alignment() {
+                            visage::AlignMode::None => "not at all (metric)",
+                            visage::AlignMode::Scale => "by a scale per frame",
+                            _ => "by a scale and shift per frame",
+                        }
+                    );
+                }
+                DepthSource::Network(Box::new(net))
+            }
+            (None, dir) => DepthSource::Folder(
+                DepthSequence::open(
+                    dir.as_ref(),
+                    self.depth_scale.unwrap_or(1000.0),
+                    DepthKind::Z,
+                )
+                .context("cannot use --depth")?,
             ),
         };
         let mut builder = Reconstructor::builder()
@@ -358,8 +519,8 @@ pub fn terminal(bar: &ProgressBar) -> impl FrameSink + '_ {
 /// Runs `visage run`.
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let p = &args.pipeline;
-    std::fs::metadata(&p.input)
-        .with_context(|| format!("{}: cannot read the input", p.input.display()))?;
+    std::fs::metadata(p.input_path())
+        .with_context(|| format!("{}: cannot read the input", p.input_path().display()))?;
     // With --resume, a previous run is continued rather than refused.
     if !args.resume || !visage::inspect_output_folder(&args.out)?.has_run() {
         claim_output_folder(&args.out, args.overwrite)?;
@@ -373,7 +534,10 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     if faces.is_empty() {
         return Err(Failure {
             code: crate::exit::NO_FACE,
-            error: anyhow::anyhow!("{}: no face was found in any frame", p.input.display()),
+            error: anyhow::anyhow!(
+                "{}: no face was found in any frame",
+                p.input_path().display()
+            ),
         }
         .into());
     }
@@ -415,7 +579,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     }
     visage::write_json_atomically(
         &args.out.join("faces.json"),
-        &serde_json::json!({ "input": p.input.display().to_string(), "faces": records }),
+        &serde_json::json!({ "input": p.input_path().display().to_string(), "faces": records }),
     )?;
     first_error.map_or(Ok(()), Err)
 }
@@ -456,7 +620,7 @@ fn run_face(
 ) -> anyhow::Result<usize> {
     let p = &args.pipeline;
     let (mut input, reconstructor) = p.open_for(target)?;
-    let input_name = p.input.display().to_string();
+    let input_name = p.input_path().display().to_string();
     let selection = input.selection();
     let description = RunDescription {
         input: &input_name,
@@ -592,7 +756,7 @@ fn run_face(
             code: crate::exit::NO_FACE,
             error: anyhow::Error::new(e).context(format!(
                 "{}: nothing to mesh (metrics.json is in {})",
-                p.input.display(),
+                p.input_path().display(),
                 dir.display()
             )),
         }
