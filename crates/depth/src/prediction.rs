@@ -94,8 +94,9 @@ pub struct Prediction {
 }
 
 impl Prediction {
-    /// The output bilinearly interpolated at frame position `(u, v)`; `None` outside the
-    /// region (within half an output pixel of its edge the edge value holds).
+    /// The output bilinearly interpolated at frame position `(u, v)` (values that are not
+    /// finite left out); `None` outside the region (within half an output pixel of its edge
+    /// the edge value holds).
     pub fn at(&self, u: f64, v: f64) -> Option<f32> {
         let r = &self.region;
         if !(u >= r.left && v >= r.top && u <= r.left + r.width && v <= r.top + r.height) {
@@ -136,7 +137,8 @@ impl Prediction {
 }
 
 /// Bilinear interpolation of a row-major grid at pixel-centre position `(x, y)`, clamped to
-/// the grid's edge.
+/// the grid's edge; values that are not finite (no data) are left out and the weights of the
+/// others renormalised (NaN when none remains).
 #[inline]
 pub(crate) fn bilinear(values: &[f32], width: u32, height: u32, x: f64, y: f64) -> f32 {
     let (w, h) = (width as usize, height as usize);
@@ -145,10 +147,25 @@ pub(crate) fn bilinear(values: &[f32], width: u32, height: u32, x: f64, y: f64) 
     let (x0, y0) = (x.floor() as usize, y.floor() as usize);
     let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
     let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
-    let at = |i: usize, j: usize| values[j * w + i];
-    let top = at(x0, y0) + fx * (at(x1, y0) - at(x0, y0));
-    let bottom = at(x0, y1) + fx * (at(x1, y1) - at(x0, y1));
-    top + fy * (bottom - top)
+    let mut sum = 0.0f32;
+    let mut weight = 0.0f32;
+    for (i, j, wgt) in [
+        (x0, y0, (1.0 - fx) * (1.0 - fy)),
+        (x1, y0, fx * (1.0 - fy)),
+        (x0, y1, (1.0 - fx) * fy),
+        (x1, y1, fx * fy),
+    ] {
+        let v = values[j * w + i];
+        if wgt > 0.0 && v.is_finite() {
+            sum += wgt * v;
+            weight += wgt;
+        }
+    }
+    if weight > 0.0 {
+        sum / weight
+    } else {
+        f32::NAN
+    }
 }
 
 #[cfg(test)]

@@ -17,6 +17,7 @@ use crate::metrics::{
 };
 use crate::model_fit::{self, benchmark_face_model, ModelFitSummary};
 use crate::noise::{NoiseGenerator, NoiseModel};
+use crate::relative_depth::{align_to_fitted_model, AlignmentSummary, SequenceAlignment};
 use crate::seed::mix_seed;
 use crate::sift_anchors::{
     frame_sift_keypoints, random_control_points, sequence_sift_anchors, SiftAnchorInfo,
@@ -304,6 +305,9 @@ pub struct SequenceInfo {
     /// The keypoint-weighted fairing, when [`Method::FaceAnchoredFairedSift`] ran.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sift_fairing: Option<SiftFairingInfo>,
+    /// The relative-depth setting: the alignment of this sequence's frames.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alignment: Option<AlignmentSummary>,
 }
 
 /// The keypoints of [`Method::FaceAnchoredFairedSift`] on a sequence, for the record.
@@ -331,6 +335,9 @@ pub struct BenchmarkResults {
     /// The face-model fit against the generator's expressions and identity (with the
     /// face-anchored set-up).
     pub model_fit: Option<ModelFitSummary>,
+    /// The relative-depth setting: every frame's alignment to the fitted model.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alignment: Option<AlignmentSummary>,
 }
 
 /// A sequence with its noisy input, the input's meshing domain and, for the face-anchored
@@ -348,6 +355,9 @@ pub struct PreparedSequence<'a> {
     /// Every frame's SIFT keypoints ([`PreparedSequence::add_fairing_keypoints`]; `None`:
     /// [`Method::FaceAnchoredFairedSift`] cannot run).
     pub fairing_keypoints: Option<Vec<Vec<[f64; 2]>>>,
+    /// The relative-depth setting: how each frame's relative depth was aligned to metres
+    /// before the methods saw it ([`crate::relative_depth`]).
+    pub alignment: Option<SequenceAlignment>,
 }
 
 /// A sequence's SIFT anchors ([`sequence_sift_anchors`]: its first frame, or every k-th) and
@@ -378,7 +388,8 @@ impl<'a> PreparedSequence<'a> {
     /// Synthesises the sequence of `seed`, draws its noise and derives the domain (pixels valid
     /// in at least [`DOMAIN_MAJORITY`] of the frames) and reference (their mean depth), as
     /// `visage fuse` does from files; with `anchoring`, also tracks it
-    /// ([`simulate_tracking`], its own seed stream).
+    /// ([`simulate_tracking`], its own seed stream). A relative noise model's frames are first
+    /// aligned to the face model fitted to the tracked landmarks (that needs `anchoring`).
     pub fn new(
         model: &IctModel,
         anchoring: Option<&'a FaceAnchoring>,
@@ -387,7 +398,39 @@ impl<'a> PreparedSequence<'a> {
     ) -> Result<PreparedSequence<'a>, EvalError> {
         let truth = synthesize(model, &config.synthesis, seed)?;
         let mut noise = NoiseGenerator::new(config.noise, mix_seed(seed ^ NOISE_SALT))?;
-        let inputs: Vec<DepthMap> = truth.frames.iter().map(|f| noise.apply(&f.depth)).collect();
+        let mut inputs: Vec<DepthMap> =
+            truth.frames.iter().map(|f| noise.apply(&f.depth)).collect();
+        let tracking = anchoring
+            .map(|a| {
+                simulate_tracking(
+                    &truth,
+                    &a.correspondence,
+                    &a.canonical,
+                    &config.tracker,
+                    config.landmark_smoothing,
+                    mix_seed(seed ^ TRACKER_SALT),
+                )
+            })
+            .transpose()?;
+        let alignment = if config.noise.relative_inverse {
+            let (Some(a), Some(t)) = (anchoring, &tracking) else {
+                return Err(EvalError::InvalidConfig {
+                    name: "noise",
+                    value: config.noise_name.clone(),
+                    reason: "relative depth is aligned to the fitted face model: needs the \
+                             model files (--models)",
+                });
+            };
+            Some(align_to_fitted_model(
+                &truth,
+                t,
+                &a.face_model,
+                config.max_depth_m,
+                &mut inputs,
+            )?)
+        } else {
+            None
+        };
         let (w, h) = (truth.k.width, truth.k.height);
         let n = (w * h) as usize;
         let (mut count, mut sum) = (vec![0usize; n], vec![0.0f64; n]);
@@ -420,18 +463,6 @@ impl<'a> PreparedSequence<'a> {
                 reference.data[p] = (sum[p] / count[p] as f64) as f32;
             }
         }
-        let tracking = anchoring
-            .map(|a| {
-                simulate_tracking(
-                    &truth,
-                    &a.correspondence,
-                    &a.canonical,
-                    &config.tracker,
-                    config.landmark_smoothing,
-                    mix_seed(seed ^ TRACKER_SALT),
-                )
-            })
-            .transpose()?;
         Ok(PreparedSequence {
             truth,
             inputs,
@@ -441,6 +472,7 @@ impl<'a> PreparedSequence<'a> {
             tracking,
             sift: None,
             fairing_keypoints: None,
+            alignment,
         })
     }
 
@@ -636,10 +668,18 @@ pub fn sequence_seed(master: u64, s: usize) -> u64 {
 }
 
 /// Picks the Taubin iteration count with the smallest RMSE on a sequence drawn from
-/// `mix_seed(seed ^ TUNING_SALT)`.
-pub fn tune_taubin(model: &IctModel, config: &BenchmarkConfig) -> Result<TaubinTuning, EvalError> {
+/// `mix_seed(seed ^ TUNING_SALT)` (`anchoring`: used by the relative-depth setting's
+/// alignment).
+pub fn tune_taubin(
+    model: &IctModel,
+    anchoring: Option<&FaceAnchoring>,
+    config: &BenchmarkConfig,
+) -> Result<TaubinTuning, EvalError> {
     let seed = mix_seed(config.seed ^ TUNING_SALT);
-    let seq = PreparedSequence::new(model, None, config, seed)?;
+    // The face-anchored set-up only where the input needs it (relative depth is aligned to
+    // the fitted face): tracking is not part of the tuning.
+    let anchoring = anchoring.filter(|_| config.noise.relative_inverse);
+    let seq = PreparedSequence::new(model, anchoring, config, seed)?;
     let setup = seq.setup(config)?;
     let input = seq.input(
         config,
@@ -750,13 +790,14 @@ pub fn run_benchmark(
     config.identity_modes = model.identity_modes.len();
     config.expression_modes = model.expression_names.clone();
     progress("tuning Taubin iterations on a separate seed");
-    let taubin_tuning = tune_taubin(model, &config)?;
+    let taubin_tuning = tune_taubin(model, anchoring, &config)?;
     let methods = selected_methods(&config, taubin_tuning.iterations, anchoring.is_some())?;
     let with_sift = methods.contains(&Method::StreamingSiftAnchors);
     let with_fairing_sift = methods.contains(&Method::FaceAnchoredFairedSift);
     let mut accumulators = vec![MetricAccumulator::default(); methods.len()];
     let mut sequences = Vec::new();
     let mut model_scores = Vec::new();
+    let mut alignments = Vec::new();
     for s in 0..config.sequences {
         let seed = sequence_seed(config.seed, s);
         progress(&format!(
@@ -827,7 +868,12 @@ pub fn run_benchmark(
                     full_weight_fraction: fraction,
                 })
             }),
+            alignment: seq
+                .alignment
+                .as_ref()
+                .map(|a| AlignmentSummary::of(std::slice::from_ref(a))),
         });
+        alignments.extend(seq.alignment.take());
     }
     let names = methods.iter().map(|m| m.name().to_string());
     Ok(BenchmarkResults {
@@ -843,6 +889,7 @@ pub fn run_benchmark(
             .zip(accumulators.iter().map(|a| a.per_frame()))
             .collect(),
         model_fit: (!model_scores.is_empty()).then(|| ModelFitSummary::of(&model_scores)),
+        alignment: (!alignments.is_empty()).then(|| AlignmentSummary::of(&alignments)),
     })
 }
 
@@ -852,6 +899,8 @@ pub struct SweepPoint {
     pub lambda: f64,
     pub mu: f64,
     pub rmse_mm: f64,
+    /// RMSE after each sequence's best scale ([`crate::metrics`]).
+    pub rmse_scaled_mm: f64,
     pub jitter_mm: f64,
     pub lag_frames: f64,
 }
@@ -902,6 +951,7 @@ pub fn run_sweep(
                 lambda,
                 mu,
                 rmse_mm: s.rmse_mm,
+                rmse_scaled_mm: s.rmse_scaled_mm,
                 jitter_mm: s.jitter_mm,
                 lag_frames: s.lag_frames,
             });

@@ -23,6 +23,7 @@ pub mod metrics;
 pub mod model_fit;
 mod noise;
 mod normal;
+mod relative_depth;
 mod report;
 mod seed;
 mod sift_anchors;
@@ -52,6 +53,7 @@ pub use metrics::{
 };
 pub use noise::{NoiseGenerator, NoiseModel, NOISE_PRESETS};
 pub use normal::standard_normal;
+pub use relative_depth::{align_to_fitted_model, AlignmentSummary, SequenceAlignment};
 pub use report::{csv, sweep_table, table, write_results, write_sweep};
 pub use seed::mix_seed;
 pub use sift_anchors::{

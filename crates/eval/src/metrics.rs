@@ -13,6 +13,12 @@
 //! Metrics:
 //! - **surface error** e = distance from s_k(i) to the GT mesh of frame k (exact point-to-mesh),
 //!   over i ∈ F_k; `rmse_mm` = √mean e², `median_mm` = median e, pooled over frames and sequences.
+//! - **surface error after the best scale** (`rmse_scaled_mm`): the same for σ·s_k(i), σ one
+//!   scale about the camera centre per method and sequence, the least-squares fit of the outputs
+//!   to their GT points (σ = Σ s·g / Σ s·s over the face set of every frame); `scale_error` =
+//!   mean |σ − 1| over sequences. Depth known only up to scale (a monocular network's, aligned
+//!   to a face fitted to landmarks) cannot tell a large face far away from a small one nearby:
+//!   this separates the shape error from that unobservable size.
 //! - **jitter** (mm/frame) = √mean ‖(s_k(i) − s_{k−1}(i)) − (g_k(i) − g_{k−1}(i))‖² over
 //!   i ∈ F_k ∩ F_{k−1} with g defined at both: the frame-to-frame motion the method adds on top
 //!   of the true motion of the same point (for image-plane vertices, of the surface along the
@@ -53,6 +59,11 @@ const GRID_MARGIN_M: f64 = 0.05;
 pub struct MetricAccumulator {
     /// Every face-vertex error, metres.
     errors: Vec<f64>,
+    /// The same after each sequence's best scale; Σ |σ − 1| and sequences.
+    scaled_sq: f64,
+    scaled_n: usize,
+    scale_error: f64,
+    scale_sequences: usize,
     jitter_sq: f64,
     jitter_n: usize,
     lag_sq: [f64; LAG_MAX + 1],
@@ -73,6 +84,10 @@ pub struct MetricAccumulator {
 pub struct MethodSummary {
     pub rmse_mm: f64,
     pub median_mm: f64,
+    /// RMSE after each sequence's best scale about the camera centre (module docs).
+    pub rmse_scaled_mm: f64,
+    /// Mean |σ − 1| of that scale.
+    pub scale_error: f64,
     /// mm/frame.
     pub jitter_mm: f64,
     pub lag_frames: f64,
@@ -110,6 +125,8 @@ impl MetricAccumulator {
         MethodSummary {
             rmse_mm: 1e3 * (e.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
             median_mm: 1e3 * median,
+            rmse_scaled_mm: 1e3 * (self.scaled_sq / self.scaled_n.max(1) as f64).sqrt(),
+            scale_error: self.scale_error / self.scale_sequences.max(1) as f64,
             jitter_mm: 1e3 * (self.jitter_sq / self.jitter_n.max(1) as f64).sqrt(),
             lag_frames: self.lag(),
             curvature_improvement: self.improvement / q,
@@ -358,14 +375,41 @@ pub fn evaluate_sequence(
             )
         })
         .collect();
+    // Each run's best scale about the camera centre over the sequence.
+    let scales: Vec<f64> = runs
+        .iter()
+        .map(|r| {
+            let (mut sg, mut ss) = (0.0, 0.0);
+            for k in 0..n_frames {
+                let (face, points) = (&r.vertices.truth.face[k], &r.vertices.truth.points[k]);
+                for i in (0..face.len()).filter(|&i| face[i]) {
+                    if let Some(g) = points[i] {
+                        let p = row(&r.solutions[k], i);
+                        sg += (0..3).map(|c| p[c] * g[c]).sum::<f64>();
+                        ss += (0..3).map(|c| p[c] * p[c]).sum::<f64>();
+                    }
+                }
+            }
+            if ss > 0.0 && sg > 0.0 {
+                sg / ss
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    for (acc, sigma) in accumulators.iter_mut().zip(&scales) {
+        acc.scale_error += (sigma - 1.0).abs();
+        acc.scale_sequences += 1;
+    }
     let mut positions = Vec::new();
     for (k, &moving_k) in moving.iter().enumerate() {
         let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
-        for r in runs {
+        for (r, sigma) in runs.iter().zip(&scales) {
             for (i, _) in r.vertices.truth.face[k].iter().enumerate().filter(|f| *f.1) {
                 for c in 0..3 {
-                    lo[c] = lo[c].min(r.solutions[k][(i, c)]);
-                    hi[c] = hi[c].max(r.solutions[k][(i, c)]);
+                    let v = r.solutions[k][(i, c)];
+                    lo[c] = lo[c].min(v).min(sigma * v);
+                    hi[c] = hi[c].max(v).max(sigma * v);
                 }
             }
         }
@@ -374,7 +418,12 @@ pub fn evaluate_sequence(
         }
         let gt = &seq.frames[k].vertices;
         let grid = TriangleGrid::new(gt, &seq.triangles, lo, hi, GRID_MARGIN_M, GRID_CELL_M);
-        for ((r, acc), quality) in runs.iter().zip(accumulators.iter_mut()).zip(&mut quality) {
+        for (((r, acc), quality), &sigma) in runs
+            .iter()
+            .zip(accumulators.iter_mut())
+            .zip(&mut quality)
+            .zip(&scales)
+        {
             let (s, truth) = (&r.solutions[k], r.vertices.truth);
             let n = s.nrows();
             let face = &truth.face[k];
@@ -384,6 +433,10 @@ pub fn evaluate_sequence(
                     acc.errors.push(e);
                     acc.frame_err[k].0 += e * e;
                     acc.frame_err[k].1 += 1;
+                }
+                if let Some(e) = grid.distance(row(s, i).map(|c| sigma * c)) {
+                    acc.scaled_sq += e * e;
+                    acc.scaled_n += 1;
                 }
             }
             // Jitter.

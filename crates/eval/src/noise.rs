@@ -15,8 +15,13 @@
 //! 4. **Per-pixel Gaussian** — i.i.d. N(0, `gaussian_sigma_mm`²).
 //! 5. **Holes** — each pixel dropped with probability `dropout`, plus `hole_blobs` discs of radius
 //!    U(0.5, 1)·`hole_radius_px` at random covered pixels.
+//! 6. **Relative output** (`relative_inverse`) — what a monocular network such as MiDaS or
+//!    Depth Anything gives: not metres but an inverse depth known up to a scale and shift
+//!    that change every frame, `y = s_k / z + t_k` with `log s_k ~ N(0, relative_scale_log_sigma²)`
+//!    and `t_k ~ U(0, relative_shift) · s_k · mean(1/z)`. The errors of 1–4 are the
+//!    network's distortion of the shape; the pipeline aligns `y` back to metres per frame.
 //!
-//! Errors are applied to z (the project's default depth kind) in metres; missing = 0.
+//! Errors 1–5 are applied to z (the project's default depth kind) in metres; missing = 0.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -55,11 +60,17 @@ pub struct NoiseModel {
     pub edge_error_mm: f64,
     /// Depth jump between 4-neighbours that counts as an edge, mm.
     pub edge_threshold_mm: f64,
+    /// The output is a relative inverse depth `s_k / z + t_k` (module docs), not metres.
+    pub relative_inverse: bool,
+    /// σ of the log of the per-frame scale `s_k`.
+    pub relative_scale_log_sigma: f64,
+    /// Largest per-frame shift `t_k`, as a fraction of `s_k · mean(1/z)`.
+    pub relative_shift: f64,
 }
 
 /// Names accepted by [`NoiseModel::preset`].
-pub const NOISE_PRESETS: [&str; 7] = [
-    "none", "gaussian", "lowfreq", "flicker", "holes", "edges", "cnn-like",
+pub const NOISE_PRESETS: [&str; 8] = [
+    "none", "gaussian", "lowfreq", "flicker", "holes", "edges", "cnn-like", "relative",
 ];
 
 impl NoiseModel {
@@ -80,11 +91,36 @@ impl NoiseModel {
             edge_width_px: 2,
             edge_error_mm: 20.0,
             edge_threshold_mm: 10.0,
+            relative_inverse: false,
+            relative_scale_log_sigma: 0.0,
+            relative_shift: 0.0,
+        }
+    }
+
+    /// The `relative` preset, a monocular network's relative inverse depth: 1 mm per-pixel
+    /// noise, a 3 mm low-frequency distortion over 32 px cells that changes quickly from frame
+    /// to frame (AR 0.5: per-frame networks flicker), the `cnn-like` depth-edge errors, no
+    /// holes (networks give every pixel), and the output as `s_k / z + t_k` with
+    /// `log s_k ~ N(0, 0.3²)`, `t_k ~ U(0, 0.5) · s_k · mean(1/z)`.
+    pub fn relative() -> NoiseModel {
+        let cnn = NoiseModel::cnn_like();
+        NoiseModel {
+            gaussian_sigma_mm: 1.0,
+            lowfreq_sigma_mm: 3.0,
+            lowfreq_cell_px: 32.0,
+            lowfreq_temporal: 0.5,
+            edge_width_px: cnn.edge_width_px,
+            edge_error_mm: cnn.edge_error_mm,
+            edge_threshold_mm: cnn.edge_threshold_mm,
+            relative_inverse: true,
+            relative_scale_log_sigma: 0.3,
+            relative_shift: 0.5,
+            ..NoiseModel::default()
         }
     }
 
     /// A named preset: `none`, one component of `cnn-like` alone (`gaussian`, `lowfreq`,
-    /// `flicker`, `holes`, `edges`), or `cnn-like`.
+    /// `flicker`, `holes`, `edges`), `cnn-like`, or `relative` ([`NoiseModel::relative`]).
     pub fn preset(name: &str) -> Result<NoiseModel, EvalError> {
         let all = NoiseModel::cnn_like();
         let none = NoiseModel::default();
@@ -118,6 +154,7 @@ impl NoiseModel {
                 ..none
             },
             "cnn-like" => all,
+            "relative" => NoiseModel::relative(),
             _ => {
                 return Err(EvalError::UnknownNoise {
                     name: name.into(),
@@ -144,6 +181,8 @@ impl NoiseModel {
             ("hole_radius_px", self.hole_radius_px),
             ("edge_error_mm", self.edge_error_mm),
             ("edge_threshold_mm", self.edge_threshold_mm),
+            ("relative_scale_log_sigma", self.relative_scale_log_sigma),
+            ("relative_shift", self.relative_shift),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(bad(name, v, "must be finite and non-negative"));
@@ -194,7 +233,8 @@ impl NoiseGenerator {
     }
 
     /// The noisy version of the next frame's ground-truth `depth` (z-depth, metres, 0 =
-    /// background); the output has the same size and kind `Z`.
+    /// background); the output has the same size and kind `Z` (with `relative_inverse`, its
+    /// values are the relative inverse depth, not metres).
     pub fn apply(&mut self, depth: &DepthMap) -> DepthMap {
         let m = self.model;
         let (w, h) = (depth.width as usize, depth.height as usize);
@@ -328,6 +368,20 @@ impl NoiseGenerator {
                 }
             }
         }
+
+        // 6. Relative inverse depth.
+        if m.relative_inverse {
+            let scale = (m.relative_scale_log_sigma * standard_normal(&mut self.rng)).exp();
+            let (sum, n) = out
+                .data
+                .iter()
+                .filter(|&&z| z > 0.0)
+                .fold((0.0, 0usize), |(s, n), &z| (s + 1.0 / z as f64, n + 1));
+            let shift = self.rng.random::<f64>() * m.relative_shift * scale * sum / n.max(1) as f64;
+            for o in out.data.iter_mut().filter(|z| **z > 0.0) {
+                *o = (scale / *o as f64 + shift) as f32;
+            }
+        }
         out
     }
 
@@ -431,6 +485,30 @@ mod tests {
             }
         }
         assert!(e.valid_count() < covered);
+    }
+
+    #[test]
+    fn the_relative_preset_is_an_affine_inverse_depth_per_frame() {
+        let gt = scene();
+        let exact = NoiseModel {
+            relative_inverse: true,
+            relative_scale_log_sigma: 0.3,
+            relative_shift: 0.5,
+            ..NoiseModel::default()
+        };
+        let mut g = NoiseGenerator::new(exact, 7).unwrap();
+        for _ in 0..3 {
+            let y = g.apply(&gt);
+            // y = s / z + t: two pixels at different depths give s and t; every pixel agrees.
+            let (y0, y1) = (y.data[0] as f64, y.data[40] as f64);
+            let s = (y0 - y1) / (1.0 / 0.5 - 1.0 / 0.52);
+            let t = y0 - s / 0.5;
+            assert!(s > 0.0 && t >= 0.0, "{s} {t}");
+            for (o, z) in y.data.iter().zip(&gt.data).filter(|(_, z)| **z > 0.0) {
+                assert!((*o as f64 - (s / *z as f64 + t)).abs() < 1e-4);
+            }
+        }
+        assert!(NoiseModel::preset("relative").unwrap().relative_inverse);
     }
 
     #[test]

@@ -45,17 +45,26 @@ pub fn table(results: &BenchmarkResults) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:<22} {:>9} {:>10} {:>11} {:>6} {:>10} {:>10} {:>9}",
-        "method", "rmse_mm", "median_mm", "jitter_mm", "lag", "curv_impr", "rough_deg", "ms/frame"
+        "{:<22} {:>9} {:>10} {:>10} {:>11} {:>6} {:>10} {:>10} {:>9}",
+        "method",
+        "rmse_mm",
+        "median_mm",
+        "rmse@scale",
+        "jitter_mm",
+        "lag",
+        "curv_impr",
+        "rough_deg",
+        "ms/frame"
     );
     for name in ordered(results) {
         let m = &results.methods[name];
         let _ = writeln!(
             s,
-            "{:<22} {:>9.3} {:>10.3} {:>11.3} {:>6.2} {:>10.2} {:>10.2} {:>9.2}",
+            "{:<22} {:>9.3} {:>10.3} {:>10.3} {:>11.3} {:>6.2} {:>10.2} {:>10.2} {:>9.2}",
             name,
             m.rmse_mm,
             m.median_mm,
+            m.rmse_scaled_mm,
             m.jitter_mm,
             m.lag_frames,
             m.curvature_improvement,
@@ -78,21 +87,31 @@ pub fn table(results: &BenchmarkResults) -> String {
             m.ms_per_frame
         );
     }
+    if let Some(a) = &results.alignment {
+        let _ = writeln!(
+            s,
+            "relative depth aligned to the fitted face: {} frames ({} failed), residual median \
+             {:.2} mm, 95th percentile {:.2} mm",
+            a.frames, a.failed, a.median_residual_mm, a.p95_residual_mm
+        );
+    }
     s
 }
 
 /// The CSV form of the method table (roughness in radians, as in `results.json`).
 pub fn csv(results: &BenchmarkResults) -> String {
     let mut s = String::from(
-        "method,rmse_mm,median_mm,jitter_mm,lag_frames,curvature_improvement,roughness,mean_abs_h,ms_per_frame,samples\n",
+        "method,rmse_mm,median_mm,rmse_scaled_mm,scale_error,jitter_mm,lag_frames,curvature_improvement,roughness,mean_abs_h,ms_per_frame,samples\n",
     );
     for name in ordered(results) {
         let m = &results.methods[name];
         let _ = writeln!(
             s,
-            "{name},{},{},{},{},{},{},{},{},{}",
+            "{name},{},{},{},{},{},{},{},{},{},{},{}",
             m.rmse_mm,
             m.median_mm,
+            m.rmse_scaled_mm,
+            m.scale_error,
             m.jitter_mm,
             m.lag_frames,
             m.curvature_improvement,
@@ -108,14 +127,14 @@ pub fn csv(results: &BenchmarkResults) -> String {
 /// The sweep as a fixed-width text table, one line per (λ, μ).
 pub fn sweep_table(points: &[SweepPoint]) -> String {
     let mut s = format!(
-        "{:>8} {:>8} {:>9} {:>10} {:>6}\n",
-        "lambda", "mu", "rmse_mm", "jitter_mm", "lag"
+        "{:>8} {:>8} {:>9} {:>10} {:>10} {:>6}\n",
+        "lambda", "mu", "rmse_mm", "rmse@scale", "jitter_mm", "lag"
     );
     for p in points {
         let _ = writeln!(
             s,
-            "{:>8} {:>8} {:>9.3} {:>10.3} {:>6.2}",
-            p.lambda, p.mu, p.rmse_mm, p.jitter_mm, p.lag_frames
+            "{:>8} {:>8} {:>9.3} {:>10.3} {:>10.3} {:>6.2}",
+            p.lambda, p.mu, p.rmse_mm, p.rmse_scaled_mm, p.jitter_mm, p.lag_frames
         );
     }
     s
@@ -164,12 +183,12 @@ pub fn write_sweep(
         source: e.into(),
     })?;
     write(&out.join("sweep.json"), &json)?;
-    let mut csv = String::from("lambda,mu,rmse_mm,jitter_mm,lag_frames\n");
+    let mut csv = String::from("lambda,mu,rmse_mm,rmse_scaled_mm,jitter_mm,lag_frames\n");
     for p in points {
         let _ = writeln!(
             csv,
-            "{},{},{},{},{}",
-            p.lambda, p.mu, p.rmse_mm, p.jitter_mm, p.lag_frames
+            "{},{},{},{},{},{}",
+            p.lambda, p.mu, p.rmse_mm, p.rmse_scaled_mm, p.jitter_mm, p.lag_frames
         );
     }
     write(&out.join("sweep.csv"), &csv)?;
