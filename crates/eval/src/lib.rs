@@ -25,6 +25,7 @@ mod noise;
 mod normal;
 mod relative_depth;
 mod report;
+mod rgbd_export;
 mod seed;
 mod sift_anchors;
 mod sift_fairing;
@@ -55,6 +56,7 @@ pub use noise::{NoiseGenerator, NoiseModel, NOISE_PRESETS};
 pub use normal::standard_normal;
 pub use relative_depth::{align_to_fitted_model, AlignmentSummary, SequenceAlignment};
 pub use report::{csv, sweep_table, table, write_results, write_sweep};
+pub use rgbd_export::{write_tum_recording, RecordingClock};
 pub use seed::mix_seed;
 pub use sift_anchors::{
     frame_sift_keypoints, gray_render, random_control_points, sequence_sift_anchors, sift_anchors,
