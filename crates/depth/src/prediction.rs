@@ -108,7 +108,8 @@ impl Prediction {
 
     /// A `width × height` depth map of the frame: `to_depth(value)` (metres, `kind`) at every
     /// pixel the region covers, 0 elsewhere and where it gives no positive finite depth or one
-    /// beyond `max_depth`.
+    /// beyond `max_depth`. The output is converted first and the depth interpolated (a plane
+    /// stays a plane to within the interpolation).
     pub fn depth_map(
         &self,
         width: u32,
@@ -117,22 +118,82 @@ impl Prediction {
         max_depth: f64,
         to_depth: impl Fn(f64) -> f64,
     ) -> DepthMap {
+        let converted: Vec<f32> = self
+            .values
+            .iter()
+            .map(|&x| {
+                let z = to_depth(x as f64);
+                if z.is_finite() && z > 0.0 && z <= max_depth {
+                    z as f32
+                } else {
+                    f32::NAN
+                }
+            })
+            .collect();
         let mut map = DepthMap::empty(width, height, kind);
         let r = &self.region;
         let clamp = |lo: f64, n: u32| lo.ceil().clamp(0.0, n as f64) as u32;
         let (u0, u1) = (clamp(r.left, width), clamp(r.left + r.width, width));
         let (v0, v1) = (clamp(r.top, height), clamp(r.top + r.height, height));
+        // Per column: the grid column and weight, computed once.
+        let (gw, gh) = (self.width as usize, self.height as usize);
+        let axis = |g: f64, n: usize| {
+            let g = g.clamp(0.0, (n - 1) as f64);
+            let i = g.floor() as usize;
+            (i, (i + 1).min(n - 1), (g - i as f64) as f32)
+        };
+        let columns: Vec<(usize, usize, f32)> = (u0..u1)
+            .map(|u| {
+                axis(
+                    r.frame_to_grid(self.width, self.height, u as f64, 0.0)[0],
+                    gw,
+                )
+            })
+            .collect();
         for v in v0..v1 {
-            let y = r.frame_to_grid(self.width, self.height, 0.0, v as f64)[1];
-            for u in u0..u1 {
-                let x = r.frame_to_grid(self.width, self.height, u as f64, 0.0)[0];
-                let z = to_depth(bilinear(&self.values, self.width, self.height, x, y) as f64);
-                if z.is_finite() && z > 0.0 && z <= max_depth {
-                    map.data[v as usize * width as usize + u as usize] = z as f32;
+            let (j0, j1, fy) = axis(
+                r.frame_to_grid(self.width, self.height, 0.0, v as f64)[1],
+                gh,
+            );
+            let (top, bottom) = (&converted[j0 * gw..][..gw], &converted[j1 * gw..][..gw]);
+            let row = &mut map.data[v as usize * width as usize..][..width as usize];
+            for (out, &(i0, i1, fx)) in row[u0 as usize..u1 as usize].iter_mut().zip(&columns) {
+                let z = blend(top[i0], top[i1], bottom[i0], bottom[i1], fx, fy);
+                if z.is_finite() {
+                    *out = z;
                 }
             }
         }
         map
+    }
+}
+
+/// Bilinear blend of four corner values with weights from `fx`, `fy`; corners that are not
+/// finite are left out and the others renormalised (NaN when none remains).
+#[inline]
+fn blend(a: f32, b: f32, c: f32, d: f32, fx: f32, fy: f32) -> f32 {
+    if a.is_finite() && b.is_finite() && c.is_finite() && d.is_finite() {
+        let top = a + fx * (b - a);
+        let bottom = c + fx * (d - c);
+        return top + fy * (bottom - top);
+    }
+    let mut sum = 0.0f32;
+    let mut weight = 0.0f32;
+    for (v, w) in [
+        (a, (1.0 - fx) * (1.0 - fy)),
+        (b, fx * (1.0 - fy)),
+        (c, (1.0 - fx) * fy),
+        (d, fx * fy),
+    ] {
+        if w > 0.0 && v.is_finite() {
+            sum += w * v;
+            weight += w;
+        }
+    }
+    if weight > 0.0 {
+        sum / weight
+    } else {
+        f32::NAN
     }
 }
 
@@ -147,25 +208,8 @@ pub(crate) fn bilinear(values: &[f32], width: u32, height: u32, x: f64, y: f64) 
     let (x0, y0) = (x.floor() as usize, y.floor() as usize);
     let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
     let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
-    let mut sum = 0.0f32;
-    let mut weight = 0.0f32;
-    for (i, j, wgt) in [
-        (x0, y0, (1.0 - fx) * (1.0 - fy)),
-        (x1, y0, fx * (1.0 - fy)),
-        (x0, y1, (1.0 - fx) * fy),
-        (x1, y1, fx * fy),
-    ] {
-        let v = values[j * w + i];
-        if wgt > 0.0 && v.is_finite() {
-            sum += wgt * v;
-            weight += wgt;
-        }
-    }
-    if weight > 0.0 {
-        sum / weight
-    } else {
-        f32::NAN
-    }
+    let at = |i: usize, j: usize| values[j * w + i];
+    blend(at(x0, y0), at(x1, y0), at(x0, y1), at(x1, y1), fx, fy)
 }
 
 #[cfg(test)]
