@@ -101,6 +101,48 @@ const CASES: &[Case] = &[
         models: true,
     },
     Case {
+        what: "a depth network that is missing",
+        args: &["run", "{dir}/face.png", "--out", "{dir}/o4", "--depth", "{dir}/missing.onnx"],
+        exit: 2,
+        says: "cannot use --depth: missing.onnx: No such file or directory (os error 2)",
+        models: false,
+    },
+    Case {
+        what: "a depth network that is not ONNX",
+        args: &["run", "{dir}/face.png", "--out", "{dir}/o5", "--depth", "{dir}/garbage.onnx"],
+        exit: 2,
+        says: "cannot use --depth: garbage.onnx: not an ONNX model: failed to decode Protobuf message",
+        models: false,
+    },
+    Case {
+        what: "a depth network whose input is not one image",
+        args: &["run", "{dir}/face.png", "--out", "{dir}/o6", "--depth", "{dir}/rank3_input.onnx"],
+        exit: 2,
+        says: "cannot use --depth: rank3_input.onnx: input 'image' has rank 3 (shape [3, 64, 64]); a depth network takes one image, 1×3×H×W",
+        models: false,
+    },
+    Case {
+        what: "a depth network with an operator visage cannot run",
+        args: &["run", "{dir}/face.png", "--out", "{dir}/o7", "--depth", "{dir}/unsupported_op.onnx"],
+        exit: 2,
+        says: "cannot use --depth: unsupported_op.onnx: the network uses operators visage's ONNX runtime (tract) does not implement: MaxUnpool",
+        models: false,
+    },
+    Case {
+        what: "a depth network whose output is not a depth map of the input's shape",
+        args: &["run", "{dir}/face.png", "--out", "{dir}/o8", "--depth", "{dir}/wrong_output.onnx"],
+        exit: 2,
+        says: "cannot use --depth: wrong_output.onnx: the output is 48×16 (shape [1, 1, 16, 48]) for a 64×64 input; a depth map must have the input's aspect ratio",
+        models: false,
+    },
+    Case {
+        what: "a folder that is not an RGB-D recording",
+        args: &["run", "--rgbd", "{dir}/full", "--out", "{dir}/o9"],
+        exit: 2,
+        says: "cannot use --rgbd: full: not an RGB-D recording: expected rgb.txt and depth.txt (TUM RGB-D) or the folders rgb/ and depth/",
+        models: false,
+    },
+    Case {
         what: "no face in any frame",
         args: &["run", "{dir}/grey.png", "--out", "{dir}/o3"],
         exit: 3,
@@ -146,6 +188,11 @@ fn make_files(dir: &Path) {
     }
     std::fs::create_dir(dir.join("full")).unwrap();
     write("full/notes.txt", b"mine");
+    let networks = visage_testdata::workspace_root().join("crates/depth/tests/data");
+    for name in ["rank3_input.onnx", "unsupported_op.onnx", "wrong_output.onnx"] {
+        std::fs::copy(networks.join(name), dir.join(name)).unwrap();
+    }
+    write("garbage.onnx", b"not a network\n");
 }
 
 /// The table rows of `docs/errors.md`: (first column, exit code column, message column).

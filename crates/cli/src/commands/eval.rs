@@ -56,7 +56,9 @@ pub struct SyntheticArgs {
     /// Frames per sequence (default 120; quick: 24).
     #[arg(long)]
     pub frames: Option<usize>,
-    /// Noise preset: none, gaussian, lowfreq, flicker, holes, edges, cnn-like.
+    /// Noise preset: none, gaussian, lowfreq, flicker, holes, edges, cnn-like, or relative (a
+    /// monocular network's inverse depth up to a per-frame scale and shift, aligned to the
+    /// face model fitted to the landmarks before the methods see it; needs --models).
     #[arg(long, default_value = "cnn-like")]
     pub noise: String,
     /// Master seed; the same seed gives the same results.json (timings aside).
