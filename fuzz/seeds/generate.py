@@ -361,6 +361,26 @@ def tflite():
          f32s([-2.0]), f32s([1.0])]))
 
 
+# --- tum_list: TUM RGB-D lists (rgb.txt / depth.txt) and near misses. ---------------------
+
+write("tum_list", "rgb.txt", "# color images\n# file: 'rgbd_dataset_freiburg1_xyz.bag'\n"
+      "# timestamp filename\n1305031102.175304 rgb/1305031102.175304.png\n"
+      "1305031102.211214 rgb/1305031102.211214.png\n")
+write("tum_list", "unsorted_extra_columns.txt", "2.0 b.png extra\n1.0 a.png\n\n")
+write("tum_list", "bad_time.txt", "nan rgb/x.png\n1e999 rgb/y.png\n")
+
+# --- network_config: depth network descriptions and near misses. ---------------------------
+
+write("network_config", "full.json",
+      '{"input": {"width": 256, "height": 256, "layout": "nchw", "color": "rgb", '
+      '"scale": 0.00392156862745098, "mean": [0.485, 0.456, 0.406], '
+      '"std": [0.229, 0.224, 0.225], "resize": "stretch"}, '
+      '"output": {"kind": "inverse", "scale": 1.0, "measures": "z"}, '
+      '"region": "face", "face_margin": 0.5, "align": "auto"}')
+write("network_config", "metric.json", '{"output": {"kind": "metric", "scale": 0.001}, "align": "scale"}')
+write("network_config", "bad.json", '{"input": {"std": [0, 1, 1]}, "align": "none"}')
+
+
 if __name__ == "__main__":
     depth_png()
     json_files()

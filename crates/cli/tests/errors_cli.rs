@@ -189,7 +189,11 @@ fn make_files(dir: &Path) {
     std::fs::create_dir(dir.join("full")).unwrap();
     write("full/notes.txt", b"mine");
     let networks = visage_testdata::workspace_root().join("crates/depth/tests/data");
-    for name in ["rank3_input.onnx", "unsupported_op.onnx", "wrong_output.onnx"] {
+    for name in [
+        "rank3_input.onnx",
+        "unsupported_op.onnx",
+        "wrong_output.onnx",
+    ] {
         std::fs::copy(networks.join(name), dir.join(name)).unwrap();
     }
     write("garbage.onnx", b"not a network\n");

@@ -33,6 +33,6 @@ pub use network_config::{
 pub use prediction::{FrameRegion, Prediction};
 pub use registration::Registration;
 pub use rgbd_recording::{
-    RgbdFrame, RgbdLayout, RgbdOptions, RgbdRecording, FOLDER_DEPTH_SCALE, MAX_TIME_DIFFERENCE_S,
-    TUM_DEPTH_SCALE,
+    parse_tum_list, RgbdFrame, RgbdLayout, RgbdOptions, RgbdRecording, FOLDER_DEPTH_SCALE,
+    MAX_TIME_DIFFERENCE_S, TUM_DEPTH_SCALE,
 };

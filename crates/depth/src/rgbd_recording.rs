@@ -224,12 +224,26 @@ impl RgbdRecording {
     }
 }
 
-/// A TUM list: `timestamp path` per line, `#` comments, paths relative to `dir`.
+/// A TUM list file (see [`parse_tum_list`]).
 fn read_list(path: &Path, dir: &Path) -> Result<Vec<(Option<f64>, PathBuf)>, DepthError> {
     let text = std::fs::read_to_string(path).map_err(|source| DepthError::Io {
         path: path.to_owned(),
         source,
     })?;
+    parse_tum_list(&text, path, dir)
+}
+
+/// A TUM list's text (`path`: the file it came from, named in errors): `timestamp filename`
+/// per line (more columns are ignored), `#` comments, file names relative to `dir`; sorted by
+/// time.
+///
+/// # Errors
+/// A line without two columns, or a first column that is not a finite number of seconds.
+pub fn parse_tum_list(
+    text: &str,
+    path: &Path,
+    dir: &Path,
+) -> Result<Vec<(Option<f64>, PathBuf)>, DepthError> {
     let mut out = Vec::new();
     for (n, line) in text.lines().enumerate() {
         let line = line.trim();
@@ -253,7 +267,7 @@ fn read_list(path: &Path, dir: &Path) -> Result<Vec<(Option<f64>, PathBuf)>, Dep
             })?;
         out.push((Some(t), dir.join(file)));
     }
-    out.sort_by(|a, b| a.0.partial_cmp(&b.0).unwrap_or(std::cmp::Ordering::Equal));
+    out.sort_by(|a, b| a.0.unwrap_or(0.0).total_cmp(&b.0.unwrap_or(0.0)));
     Ok(out)
 }
 
