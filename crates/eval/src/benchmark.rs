@@ -356,7 +356,7 @@ pub struct PreparedSequence<'a> {
     /// [`Method::FaceAnchoredFairedSift`] cannot run).
     pub fairing_keypoints: Option<Vec<Vec<[f64; 2]>>>,
     /// The relative-depth setting: how each frame's relative depth was aligned to metres
-    /// before the methods saw it ([`crate::relative_depth`]).
+    /// before the methods saw it ([`align_to_fitted_model`](crate::align_to_fitted_model)).
     pub alignment: Option<SequenceAlignment>,
 }
 
