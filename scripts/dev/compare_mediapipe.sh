@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Times MediaPipe FaceMesh (PyPI mediapipe==0.10.21, landmarks only) and `visage bench` (the
+# whole job) alternately on the same clips; see compare_mediapipe.py for what is measured.
+#   scripts/dev/compare_mediapipe.sh [--pairs N] [CLIP…]   (default: the two shared clips)
+# Needs Python 3 with pip; the pinned environment is made under target/. Not a test requirement.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+venv=target/mediapipe-venv
+if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import mediapipe" 2>/dev/null; then
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install -q mediapipe==0.10.21
+fi
+cargo build -q --release -p visage-cli
+pairs=()
+if [ "${1:-}" = --pairs ]; then pairs=(--pairs "$2"); shift 2; fi
+clips=("$@")
+[ ${#clips[@]} -gt 0 ] || clips=(../shared/data/video/lp_d18.mp4 ../shared/data/video/lp_d13.mp4)
+"$venv/bin/python" scripts/dev/compare_mediapipe.py target/release/visage "${clips[@]}" "${pairs[@]}"
