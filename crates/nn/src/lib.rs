@@ -73,5 +73,5 @@ pub mod sparse;
 pub mod tflite;
 
 pub use error::NnError;
-pub use network::Network;
+pub use network::{Network, StepProfile};
 pub use tflite::TfliteModel;

@@ -41,7 +41,7 @@ impl Conv2dWeights {
 /// x[oy·s + ky − pad, ox·s + kx − pad, ci]` (zero outside the input), as TFLite's `CONV_2D`.
 ///
 /// `x` is `[in_h, in_w, C_in]`, `y` is `[out_h, out_w, C_out]`; `patch` is scratch of
-/// `4·k_h·k_w·C_in` values. A 1×1 stride-1 convolution is a GEMM and reads `x` in place.
+/// `k_h·k_w·C_in` values (one border pixel's window). A 1×1 stride-1 convolution is a GEMM and reads `x` in place.
 /// `act` is the fused activation, applied to the register block before it is stored.
 ///
 /// # Panics
@@ -64,7 +64,7 @@ pub fn conv2d<M: Madd>(
     let red = win.k_h * win.k_w * ci;
     assert_eq!(x.len(), win.in_h * win.in_w * ci, "conv2d input size");
     assert_eq!(y.len(), win.out_h * win.out_w * co, "conv2d output size");
-    assert!(patch.len() >= ROWS * red, "conv2d scratch too small");
+    assert!(patch.len() >= red, "conv2d scratch too small");
     let pointwise = win.k_h == 1 && win.k_w == 1 && win.stride_h == 1 && win.stride_w == 1;
     if pointwise {
         // A GEMM `[pixels, C_in] × [C_in, C_out]`, ROWS pixels at a time.
@@ -82,52 +82,154 @@ pub fn conv2d<M: Madd>(
         }
         return;
     }
-    // im2col, ROWS output pixels at a time, then the same GEMM micro-kernel.
-    let pixels = win.out_h * win.out_w;
-    let mut first = 0;
-    while first < pixels {
-        let n = ROWS.min(pixels - first);
-        for r in 0..n {
-            let (oy, ox) = ((first + r) / win.out_w, (first + r) % win.out_w);
-            let dst = &mut patch[r * red..(r + 1) * red];
-            // Per kernel row, the valid taps are one contiguous run of the input row.
-            let (kx0, kx1) = valid_taps(ox, win.stride_w, win.pad_left, win.k_w, win.in_w);
-            for ky in 0..win.k_h {
-                let row = &mut dst[ky * win.k_w * ci..(ky + 1) * win.k_w * ci];
-                match Window::tap(oy, win.stride_h, ky, win.pad_top, win.in_h) {
-                    Some(iy) if kx1 > kx0 => {
-                        let ix0 = ox * win.stride_w + kx0 - win.pad_left;
-                        row[..kx0 * ci].fill(0.0);
-                        row[kx0 * ci..kx1 * ci].copy_from_slice(
-                            &x[(iy * win.in_w + ix0) * ci..(iy * win.in_w + ix0 + kx1 - kx0) * ci],
-                        );
-                        row[kx1 * ci..].fill(0.0);
-                    }
-                    _ => row.fill(0.0),
+    // Per output row: the pixels whose whole window lies inside the input read it in place
+    // (`block_direct`, ROWS pixels at a time); the others are gathered into `patch` first
+    // (im2col, zeros in the padding) for the GEMM micro-kernel.
+    let lo = win.pad_left.div_ceil(win.stride_w).min(win.out_w);
+    let hi = (win.in_w + win.pad_left)
+        .checked_sub(win.k_w)
+        .map_or(0, |last| last / win.stride_w + 1)
+        .min(win.out_w)
+        .max(lo);
+    for oy in 0..win.out_h {
+        let (ky0, ky1) = valid_taps(oy, win.stride_h, win.pad_top, win.k_h, win.in_h);
+        let (lo, hi) = if ky0 == 0 && ky1 == win.k_h {
+            (lo, hi)
+        } else {
+            (0, 0)
+        };
+        for ox in (0..lo).chain(hi..win.out_w) {
+            let dst = &mut patch[..red];
+            gather(x, win, ci, oy, ox, dst);
+            let o = (oy * win.out_w + ox) * co;
+            gemm_rows::<M, 1>(dst, red, &wts.w, &wts.bias, relu, &mut y[o..o + co]);
+        }
+        let iy0 = oy * win.stride_h - win.pad_top;
+        let mut ox = lo;
+        while ox < hi {
+            let base = (iy0 * win.in_w + ox * win.stride_w - win.pad_left) * ci;
+            let o = (oy * win.out_w + ox) * co;
+            if ox + ROWS <= hi {
+                direct_rows::<M, ROWS>(x, win, ci, base, &wts.w, &wts.bias, relu, &mut y[o..]);
+                ox += ROWS;
+            } else {
+                direct_rows::<M, 1>(x, win, ci, base, &wts.w, &wts.bias, relu, &mut y[o..]);
+                ox += 1;
+            }
+        }
+    }
+}
+
+/// The window of output pixel `(oy, ox)` as one row of `k_h·k_w·C_in` values (zero in the
+/// padding) into `dst`.
+#[inline(always)]
+fn gather(x: &[f32], win: &Window, ci: usize, oy: usize, ox: usize, dst: &mut [f32]) {
+    // Per kernel row, the valid taps are one contiguous run of the input row.
+    let (kx0, kx1) = valid_taps(ox, win.stride_w, win.pad_left, win.k_w, win.in_w);
+    for ky in 0..win.k_h {
+        let row = &mut dst[ky * win.k_w * ci..(ky + 1) * win.k_w * ci];
+        match Window::tap(oy, win.stride_h, ky, win.pad_top, win.in_h) {
+            Some(iy) if kx1 > kx0 => {
+                let ix0 = ox * win.stride_w + kx0 - win.pad_left;
+                row[..kx0 * ci].fill(0.0);
+                row[kx0 * ci..kx1 * ci].copy_from_slice(
+                    &x[(iy * win.in_w + ix0) * ci..(iy * win.in_w + ix0 + kx1 - kx0) * ci],
+                );
+                row[kx1 * ci..].fill(0.0);
+            }
+            _ => row.fill(0.0),
+        }
+    }
+}
+
+/// [`gemm_rows`] for `R` neighbouring output pixels of one row whose windows lie inside the
+/// input, read in place: pixel `p`'s window starts at `x[base + p·stride_w·C_in]`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn direct_rows<M: Madd, const R: usize>(
+    x: &[f32],
+    win: &Window,
+    ci: usize,
+    base: usize,
+    w: &[f32],
+    b: &[f32],
+    relu: bool,
+    y: &mut [f32],
+) {
+    let co = b.len();
+    let mut ob = 0;
+    while ob + 16 <= co {
+        direct_block::<M, R, 16>(x, win, ci, base, w, b, ob, relu, y);
+        ob += 16;
+    }
+    if ob + 8 <= co {
+        direct_block::<M, R, 8>(x, win, ci, base, w, b, ob, relu, y);
+        ob += 8;
+    }
+    if ob + 4 <= co {
+        direct_block::<M, R, 4>(x, win, ci, base, w, b, ob, relu, y);
+        ob += 4;
+    }
+    while ob < co {
+        direct_block::<M, R, 1>(x, win, ci, base, w, b, ob, relu, y);
+        ob += 1;
+    }
+}
+
+/// One `R × NB` register block of [`direct_rows`], output channels `ob .. ob + NB`; the taps go
+/// in the weights' order `(ky, kx, c)`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn direct_block<M: Madd, const R: usize, const NB: usize>(
+    x: &[f32],
+    win: &Window,
+    ci: usize,
+    base: usize,
+    w: &[f32],
+    b: &[f32],
+    ob: usize,
+    relu: bool,
+    y: &mut [f32],
+) {
+    let co = b.len();
+    let step = win.stride_w * ci;
+    let run = win.k_w * ci;
+    let mut acc = [[0.0f32; NB]; R];
+    let bias: &[f32; NB] = b[ob..ob + NB].try_into().unwrap_or(&[0.0; NB]);
+    for row in acc.iter_mut() {
+        *row = *bias;
+    }
+    for ky in 0..win.k_h {
+        // Within a kernel row the taps (kx, c) are contiguous in the input.
+        let start = base + ky * win.in_w * ci;
+        let starts: [usize; R] = std::array::from_fn(|p| start + p * step);
+        let wk = &w[ky * run * co..];
+        for t in 0..run {
+            let wr: &[f32; NB] = wk[t * co + ob..t * co + ob + NB]
+                .try_into()
+                .unwrap_or(&[0.0; NB]);
+            for (row, &s0) in acc.iter_mut().zip(&starts) {
+                let ap = x[s0 + t];
+                for j in 0..NB {
+                    row[j] = M::madd(ap, wr[j], row[j]);
                 }
             }
         }
-        let out = &mut y[first * co..(first + n) * co];
-        if n == ROWS {
-            gemm_rows::<M, ROWS>(&patch[..ROWS * red], red, &wts.w, &wts.bias, relu, out);
-        } else {
-            for r in 0..n {
-                gemm_rows::<M, 1>(
-                    &patch[r * red..(r + 1) * red],
-                    red,
-                    &wts.w,
-                    &wts.bias,
-                    relu,
-                    &mut out[r * co..(r + 1) * co],
-                );
+    }
+    if relu {
+        for row in acc.iter_mut() {
+            for v in row.iter_mut() {
+                *v = v.max(0.0);
             }
         }
-        first += n;
+    }
+    for (p, row) in acc.iter().enumerate() {
+        y[p * co + ob..p * co + ob + NB].copy_from_slice(row);
     }
 }
 
 /// Pixels per micro-kernel call.
-pub const ROWS: usize = 4;
+const ROWS: usize = 4;
 
 /// `y[p, :] = b + Σ_r a[p, r] · w[r, :]` for `R` rows (then `max(·, 0)` if `relu`): `a` is
 /// `R × red`, `w` is `red × C_out`, `y` is `R × C_out`. Output channels go in register blocks of

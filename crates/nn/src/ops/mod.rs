@@ -14,7 +14,7 @@ mod pad;
 mod resize_bilinear;
 mod window;
 
-pub use conv2d::{conv2d, Conv2dWeights, ROWS as CONV_ROWS};
+pub use conv2d::{conv2d, Conv2dWeights};
 pub use depth_to_space::depth_to_space;
 pub use depthwise_conv2d::depthwise_conv2d;
 pub use elementwise::{add, prelu, relu, Activation};
