@@ -49,7 +49,7 @@ enum Command {
     ///
     /// Decoding, tracking, the metric fit, depth and fusion all run and the quality figures
     /// are measured; prints JSON (frames per second, per-stage median and 95th percentile,
-    /// CPU use, peak memory, jitter and reprojection error).
+    /// CPU per frame with the decoder, peak memory, jitter and reprojection error).
     Bench(commands::bench::BenchArgs),
     /// Fuse a folder of 16-bit PNG depth maps into a mesh sequence
     ///

@@ -378,10 +378,12 @@ pub struct RunSummary {
     pub fps: f64,
     /// Set-up before the first frame: models, operators and factorisation (ms).
     pub setup_ms: f64,
-    /// User + system CPU seconds of the process during the frames, and CPU s / wall s (up to
-    /// the number of cores).
+    /// User + system CPU seconds during the frames, of the process and the decoder it runs
+    /// (FFmpeg), and CPU s / wall s (up to the number of cores).
     pub cpu_s: Option<f64>,
     pub cpu_use: Option<f64>,
+    /// CPU milliseconds per frame, decoding included (`cpu_s` / frames).
+    pub cpu_ms_per_frame: Option<f64>,
     /// Frames on which the face detector ran (the rest were tracked).
     pub detector_runs: usize,
     /// The most faces the detector found in one frame, and the first frame (input index) where
@@ -517,6 +519,10 @@ impl RunSummary {
                 .cpu_s
                 .filter(|_| timing.wall_s > 0.0)
                 .map(|c| c / timing.wall_s),
+            cpu_ms_per_frame: timing
+                .cpu_s
+                .filter(|_| !frames.is_empty())
+                .map(|c| 1e3 * c / frames.len() as f64),
             detector_runs: frames
                 .iter()
                 .filter(|f| f.detector_ran == Some(true))

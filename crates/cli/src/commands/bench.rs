@@ -51,6 +51,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         "setup_ms": s.setup_ms,
         "cpu_s": s.cpu_s,
         "cpu_use": s.cpu_use,
+        "cpu_ms_per_frame": s.cpu_ms_per_frame,
         "threads": std::thread::available_parallelism().map(|n| n.get()).ok(),
         "peak_rss_mib": s.peak_rss_mib,
         "detector_runs": s.detector_runs,
