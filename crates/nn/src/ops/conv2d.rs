@@ -83,7 +83,7 @@ pub fn conv2d<M: Madd>(
         return;
     }
     // Per output row: the pixels whose whole window lies inside the input read it in place
-    // (`block_direct`, ROWS pixels at a time); the others are gathered into `patch` first
+    // (`direct_rows`, ROWS pixels at a time); the others are gathered into `patch` first
     // (im2col, zeros in the padding) for the GEMM micro-kernel.
     let lo = win.pad_left.div_ceil(win.stride_w).min(win.out_w);
     let hi = (win.in_w + win.pad_left)
@@ -104,6 +104,10 @@ pub fn conv2d<M: Madd>(
             let o = (oy * win.out_w + ox) * co;
             gemm_rows::<M, 1>(dst, red, &wts.w, &wts.bias, relu, &mut y[o..o + co]);
         }
+        if lo == hi {
+            continue;
+        }
+        // Every kernel row is inside the input here, so the window's top row is too.
         let iy0 = oy * win.stride_h - win.pad_top;
         let mut ox = lo;
         while ox < hi {
@@ -368,6 +372,10 @@ mod tests {
             (4, 4, 6, 40, 3, 1, Padding::Same),
             (3, 3, 4, 6, 3, 3, Padding::Valid),
             (6, 6, 2, 3, 3, 1, Padding::Same),
+            // Rows with enough interior pixels for whole in-place blocks and a remainder.
+            (6, 13, 3, 20, 3, 1, Padding::Same),
+            (9, 17, 4, 24, 3, 2, Padding::Same),
+            (7, 12, 2, 9, 3, 1, Padding::Valid),
         ] {
             let win = Window::new(h, w, [k, k], [s, s], pad);
             let x = pseudo(h * w * ci, 1);
