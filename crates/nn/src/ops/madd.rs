@@ -2,6 +2,10 @@
 /// with FMA) or plain (two roundings). Kernels are generic over it so that the same source is
 /// compiled once per instruction set; see [`crate::network::Network::run`].
 pub trait Madd {
+    /// Whether `madd` rounds once; kernels with explicit vector code use it only then, so that
+    /// both paths keep their rounding.
+    const FUSED: bool;
+
     /// `a · b + c`.
     fn madd(a: f32, b: f32, c: f32) -> f32;
 }
@@ -13,6 +17,8 @@ pub struct Plain;
 pub struct Fused;
 
 impl Madd for Plain {
+    const FUSED: bool = false;
+
     #[inline(always)]
     fn madd(a: f32, b: f32, c: f32) -> f32 {
         a * b + c
@@ -20,6 +26,8 @@ impl Madd for Plain {
 }
 
 impl Madd for Fused {
+    const FUSED: bool = true;
+
     #[inline(always)]
     fn madd(a: f32, b: f32, c: f32) -> f32 {
         a.mul_add(b, c)
