@@ -26,22 +26,26 @@ pub const NO_FACE: u8 = 3;
 /// Exit code of a bug.
 pub const INTERNAL: u8 = 1;
 
+/// The exit code of `err`: its own (a [`Failure`]), else 1 for a bug, else 2.
+pub fn code_of(err: &anyhow::Error) -> u8 {
+    let internal = err.chain().any(|e| {
+        e.downcast_ref::<visage::Error>()
+            .is_some_and(|e| e.is_internal())
+    });
+    match err.downcast_ref::<Failure>() {
+        Some(f) => f.code,
+        None if internal => INTERNAL,
+        None => BAD_INPUT,
+    }
+}
+
 /// Prints an error chain on stderr and turns it into the process exit code.
 pub fn report(result: anyhow::Result<()>) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            let internal = err.chain().any(|e| {
-                e.downcast_ref::<visage::Error>()
-                    .is_some_and(|e| e.is_internal())
-            });
-            let code = match err.downcast_ref::<Failure>() {
-                Some(f) => f.code,
-                None if internal => INTERNAL,
-                None => BAD_INPUT,
-            };
             eprintln!("error: {}", visage::error_chain(err.as_ref()));
-            ExitCode::from(code)
+            ExitCode::from(code_of(&err))
         }
     }
 }

@@ -45,6 +45,14 @@ enum Command {
     /// before the break —, intrinsics for another size, unwritable output, missing models);
     /// 1 internal error.
     Run(commands::run::RunArgs),
+    /// `run` over one shard of a manifest of clips (array jobs), resumable, exactly once
+    ///
+    /// Each clip goes to OUT/ID/ whole, with done.json (input SHA-256, options, version,
+    /// output checksums) or error.json; clips already done are skipped. The shard comes from
+    /// --shard-index/--shard-count or the scheduler (Slurm, Kubernetes Indexed Job, AWS
+    /// Batch). `visage batch status OUT` summarises a batch folder. Exit codes: 0 every clip
+    /// done; 3 some failed (the others finished); 2 bad invocation; 130 interrupted.
+    Batch(commands::batch::BatchArgs),
     /// The `run` pipeline without writing meshes, timed per stage
     ///
     /// Decoding, tracking, the metric fit, depth and fusion all run and the quality figures
@@ -100,6 +108,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(args) => commands::run::run(args),
+        Command::Batch(args) => commands::batch::run(args),
         Command::Bench(args) => commands::bench::run(args),
         Command::Fuse(args) => commands::fuse::run(args),
         Command::Export(args) => commands::export::run(args),

@@ -518,6 +518,14 @@ pub fn terminal(bar: &ProgressBar) -> impl FrameSink + '_ {
 
 /// Runs `visage run`.
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
+    run_with_stop(args, &interrupt::install())
+}
+
+/// [`run`] that stops when `stop` turns true (Ctrl-C's flag, installed once per process).
+pub fn run_with_stop(
+    args: RunArgs,
+    stop: &std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> anyhow::Result<()> {
     let p = &args.pipeline;
     std::fs::metadata(p.input_path())
         .with_context(|| format!("{}: cannot read the input", p.input_path().display()))?;
@@ -526,9 +534,8 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         claim_output_folder(&args.out, args.overwrite)?;
     }
     // Ctrl-C ends the input: the frames read so far go through and are written.
-    let stop = interrupt::install();
     if args.faces == FacesArg::Largest {
-        return run_face(&args, &args.out, FaceTarget::Largest, &stop).map(|_| ());
+        return run_face(&args, &args.out, FaceTarget::Largest, stop).map(|_| ());
     }
     let faces = first_faces(p)?;
     if faces.is_empty() {
@@ -554,7 +561,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     for (id, (frame, bbox)) in (1..).zip(&faces) {
         let folder = format!("{}{id}", visage::FACE_FOLDER_PREFIX);
         let dir = args.out.join(&folder);
-        let result = run_face(&args, &dir, FaceTarget::Near(*bbox), &stop);
+        let result = run_face(&args, &dir, FaceTarget::Near(*bbox), stop);
         let (status, meshed) = match &result {
             Ok(meshed) => ("complete", *meshed),
             Err(_) => ("failed", 0),
