@@ -5,7 +5,9 @@
 #                             visage (release), fetch the pinned MediaPipe models (npm, and the
 #                             iris network and full-range detector from PyPI), run the sample
 #                             job into out/sample/
-#   scripts/setup.sh --ci     packages, viewer and models only (what the test suite needs)
+#   scripts/setup.sh --ci     packages, viewer and models only (what the test suite needs), and
+#                             for the batch tests a Slurm cluster's packages and the Kubernetes
+#                             schema validator (PyPI, under target/)
 #
 # Needs: a Rust toolchain (cargo), Node.js/npm (for `npm pack` and the viewer's pinned
 # packages), Python 3 with pip (for `pip download` of the mediapipe wheel), apt-get as root (or
@@ -23,6 +25,15 @@ command -v ffmpeg >/dev/null 2>&1 || need+=(ffmpeg)
 [ -x /usr/bin/chromium ] || need+=(chromium)
 command -v npm >/dev/null 2>&1 || need+=(npm)
 python3 -m pip --version >/dev/null 2>&1 || need+=(python3-pip)
+python3 -c "import venv, ensurepip" >/dev/null 2>&1 || need+=(python3-venv)
+# The test suite's single-node Slurm cluster (scripts/test_slurm.sh runs the batch deploy
+# script on it): only for the tests, without the packages' recommendations.
+slurm=()
+if [ "$mode" = ci ]; then
+  for tool in slurmctld slurmd sbatch munged; do
+    command -v "$tool" >/dev/null 2>&1 || [ -x "/usr/sbin/$tool" ] || { slurm=(slurmctld slurmd slurm-client munge); break; }
+  done
+fi
 if [ ${#need[@]} -gt 0 ]; then
   if [ "$(id -u)" = 0 ]; then
     echo "setup: installing ${need[*]} (apt)"
@@ -31,6 +42,15 @@ if [ ${#need[@]} -gt 0 ]; then
   else
     echo "setup: please install: ${need[*]} (e.g. sudo apt-get install ${need[*]})" >&2
     exit 1
+  fi
+fi
+if [ ${#slurm[@]} -gt 0 ]; then
+  if [ "$(id -u)" = 0 ]; then
+    echo "setup: installing ${slurm[*]} (apt, for the batch tests)"
+    [ ${#need[@]} -gt 0 ] || apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${slurm[@]}" >/dev/null
+  else
+    echo "setup: not root: the Slurm test will be skipped (it needs ${slurm[*]})" >&2
   fi
 fi
 
@@ -52,7 +72,15 @@ fi
 # detector from the PyPI wheel mediapipe==0.10.21, pinned and sha256-checked, into models/.
 "$bin" models fetch
 
-[ "$mode" = ci ] && exit 0
+if [ "$mode" = ci ]; then
+  # The Kubernetes schema validator for the deploy files' test (scripts/test_deploy.sh).
+  venv="$target_dir/deploy-venv"
+  if ! "$venv/bin/kubernetes-validate" --version >/dev/null 2>&1; then
+    python3 -m venv "$venv"
+    "$venv/bin/pip" install -q kubernetes-validate==1.37.0
+  fi
+  exit 0
+fi
 
 # The main job on a sample: `visage run` on a real clip → a fused metric face mesh per frame, and
 # shaded previews of a few frames (fused and raw) a person can open.

@@ -18,6 +18,10 @@ cargo fmt --all --check
 cargo clippy -q --workspace --all-targets -- -D warnings
 python3 scripts/import_cycles.py
 cargo test --workspace
+# The batch deploy files: the Kubernetes manifest against the schemas, the Slurm array job on
+# a single-node cluster started for the test (each says why when it skips).
+bash scripts/test_deploy.sh
+bash scripts/test_slurm.sh "${CARGO_TARGET_DIR:-target}/debug/visage"
 RUSTDOCFLAGS="-D warnings" cargo doc -q --workspace --no-deps
 # The fuzz targets (fuzz/, a workspace of their own that `cargo +nightly fuzz` runs; see
 # fuzz/README.md) must keep compiling: formatted and type-checked on this toolchain, without

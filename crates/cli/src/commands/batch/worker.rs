@@ -239,7 +239,9 @@ impl Worker {
                     format!("done, {frames} frames ({meshed} meshed) in {seconds:.1} s"),
                 )
             }
-            Err(e) if is_interrupted(&e) => {
+            // A stop signal also reaches the decoder (FFmpeg, in the same process group), whose
+            // end then reads as a broken video: any error after the signal is the signal's.
+            Err(e) if is_interrupted(&e) || stop.load(Ordering::SeqCst) => {
                 std::fs::remove_dir_all(&tmp).ok();
                 return Ok((Outcome::Interrupted, "interrupted; not placed".into()));
             }
