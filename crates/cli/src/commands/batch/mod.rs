@@ -32,7 +32,7 @@ use worker::{Outcome, Worker};
 pub struct BatchArgs {
     #[command(subcommand)]
     pub command: Option<BatchCommand>,
-    /// The clips: one input per line (PATH, or PATH<TAB>INTRINSICS.json; `#` comments), or
+    /// The clips: one input per line (PATH, or PATH, a tab and INTRINSICS.json; `#` comments), or
     /// JSON Lines ({"input": PATH, "intrinsics": FILE, "id": NAME, "options": [FLAG…]}).
     /// Relative paths are relative to the manifest's folder. A clip's id (the path without
     /// its extension, or "id") names its output folder OUT/ID/.
