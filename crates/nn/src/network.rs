@@ -47,6 +47,13 @@ enum Step {
         y: usize,
         act: Activation,
     },
+    /// An `ADD` (no fused activation) and the `PRELU` that is its sum's only reader.
+    AddPrelu {
+        a: usize,
+        b: usize,
+        y: usize,
+        alpha: Vec<f32>,
+    },
     Resize {
         x: usize,
         y: usize,
@@ -564,6 +571,7 @@ impl Network {
                 ));
             }
         }
+        let steps = fuse_add_prelu(steps, &model.outputs);
         let len_of: Vec<usize> = shapes.iter().map(|s| s.iter().product()).collect();
         let (slot_of, slot_len) = allocate_slots(&steps, &len_of, input, &model.outputs);
         let scratch_len = steps
@@ -722,6 +730,9 @@ impl Network {
                 Step::Add { a, b, y, act } => {
                     with_out!(*y, |out| ops::add(get!(*a), get!(*b), *act, out))
                 }
+                Step::AddPrelu { a, b, y, alpha } => {
+                    with_out!(*y, |out| ops::add_prelu(get!(*a), get!(*b), alpha, out))
+                }
                 Step::Resize {
                     x,
                     y,
@@ -864,6 +875,7 @@ fn step_cost(step: &Step, len_of: &[usize]) -> (String, u64, u64) {
             };
             (format!("add{relu}"), len_of[y], 0)
         }
+        Step::AddPrelu { alpha, .. } => ("add+prelu".into(), 2 * len_of[y], alpha.len()),
         Step::Resize { .. } => ("resize".into(), 4 * len_of[y], 0),
         Step::DepthToSpace { .. } => ("depth-to-space".into(), 0, 0),
         Step::MaxPool { win, .. } => (
@@ -889,9 +901,45 @@ fn step_io(step: &Step) -> (Vec<usize>, usize) {
         | Step::Resize { x, y, .. }
         | Step::DepthToSpace { x, y, .. }
         | Step::Copy { x, y } => (vec![*x], *y),
-        Step::Add { a, b, y, .. } => (vec![*a, *b], *y),
+        Step::Add { a, b, y, .. } | Step::AddPrelu { a, b, y, .. } => (vec![*a, *b], *y),
         Step::Concat { xs, y, .. } => (xs.clone(), *y),
     }
+}
+
+/// Merges each `ADD` without a fused activation whose sum only the next step, a `PRELU`, reads
+/// (and which is not an output) into one [`Step::AddPrelu`]: one pass over memory instead of
+/// two, the same values.
+fn fuse_add_prelu(steps: Vec<Step>, outputs: &[usize]) -> Vec<Step> {
+    let mut readers = std::collections::HashMap::<usize, usize>::new();
+    for step in &steps {
+        for t in step_io(step).0 {
+            *readers.entry(t).or_default() += 1;
+        }
+    }
+    let mut fused = Vec::with_capacity(steps.len());
+    let mut it = steps.into_iter().peekable();
+    while let Some(step) = it.next() {
+        if let Step::Add {
+            a,
+            b,
+            y: sum,
+            act: Activation::None,
+        } = step
+        {
+            let only_reader = readers.get(&sum) == Some(&1) && !outputs.contains(&sum);
+            if let Some(Step::Prelu { x, .. }) = it.peek() {
+                if *x == sum && only_reader {
+                    let Some(Step::Prelu { y, alpha, .. }) = it.next() else {
+                        unreachable!("peeked")
+                    };
+                    fused.push(Step::AddPrelu { a, b, y, alpha });
+                    continue;
+                }
+            }
+        }
+        fused.push(step);
+    }
+    fused
 }
 
 /// Liveness-based buffer sharing: each computed tensor gets a slot that no tensor alive at the
@@ -1022,6 +1070,38 @@ mod tests {
             assert_eq!(net.output_named("flat"), Some(&expected[..]));
         }
         assert!(net.output(1).is_none() && net.output_named("sum").is_none());
+    }
+
+    /// `x + x → PReLU`: one fused step when only the PReLU reads the sum, two when the sum is
+    /// also an output; the same values either way.
+    #[test]
+    fn an_add_read_only_by_a_prelu_runs_fused() {
+        let model = |outputs: Vec<usize>| TfliteModel {
+            tensors: vec![
+                tensor("x", &[1, 1, 2, 2], TensorType::Float32, 0),
+                tensor("alpha", &[1, 1, 2], TensorType::Float32, 1),
+                tensor("sum", &[1, 1, 2, 2], TensorType::Float32, 0),
+                tensor("out", &[1, 1, 2, 2], TensorType::Float32, 0),
+            ],
+            operators: vec![op(OpCode::Add, &[0, 0], 2), op(OpCode::Prelu, &[2, 1], 3)],
+            inputs: vec![0],
+            outputs,
+            buffers: vec![Vec::new(), f32_bytes(&[0.5, 0.25])],
+        };
+        let x = [1.0, -2.0, -3.0, 0.5];
+        let expected = [2.0, -1.0, -3.0, 1.0];
+        let mut fused = Network::compile(&model(vec![3]), "fused").unwrap();
+        assert_eq!(fused.steps.len(), 1);
+        fused.input_mut().copy_from_slice(&x);
+        fused.run();
+        assert_eq!(fused.output_named("out"), Some(&expected[..]));
+        assert_eq!(fused.profile(1)[0].op, "add+prelu");
+        let mut both = Network::compile(&model(vec![2, 3]), "both").unwrap();
+        assert_eq!(both.steps.len(), 2);
+        both.input_mut().copy_from_slice(&x);
+        both.run();
+        assert_eq!(both.output_named("out"), Some(&expected[..]));
+        assert_eq!(both.output_named("sum"), Some(&[2.0, -4.0, -6.0, 1.0][..]));
     }
 
     /// The full-range detector's operators: a sparse float16 kernel behind `DENSIFY` and

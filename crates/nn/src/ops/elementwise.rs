@@ -62,6 +62,29 @@ fn add_relu(a: &[f32], b: &[f32], y: &mut [f32]) {
     }
 }
 
+/// `prelu(a + b, α)` in one pass (an `ADD` whose only reader is a `PRELU`): the same values
+/// as [`add`] then [`prelu`], without writing and reading the sum.
+///
+/// # Panics
+/// If the lengths differ or are not a multiple of `alpha.len()`.
+#[track_caller]
+#[inline(always)]
+pub fn add_prelu(a: &[f32], b: &[f32], alpha: &[f32], y: &mut [f32]) {
+    assert!(a.len() == b.len() && a.len() == y.len(), "add sizes");
+    assert_eq!(a.len() % alpha.len(), 0, "prelu channel count");
+    let c = alpha.len();
+    for ((yr, ar), br) in y
+        .chunks_exact_mut(c)
+        .zip(a.chunks_exact(c))
+        .zip(b.chunks_exact(c))
+    {
+        for (((o, &u), &v), &s) in yr.iter_mut().zip(ar).zip(br).zip(alpha) {
+            let x = u + v;
+            *o = if x >= 0.0 { x } else { s * x };
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -89,5 +112,12 @@ mod tests {
             &mut y,
         );
         assert_eq!(y, [1.5, -1.5, 3.5, 0.25]);
+        // The fused add + PReLU gives add's then prelu's values, bit for bit.
+        let (a, b, alpha) = ([1.0, -2.0, 3.0, -0.3], [0.5, 0.7, -3.5, 0.1], [0.25, 0.1]);
+        let (mut sum, mut two) = ([0.0; 4], [0.0; 4]);
+        add(&a, &b, Activation::None, &mut sum);
+        prelu(&sum, &alpha, &mut two);
+        add_prelu(&a, &b, &alpha, &mut y);
+        assert_eq!(y.map(f32::to_bits), two.map(f32::to_bits));
     }
 }

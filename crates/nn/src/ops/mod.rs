@@ -17,7 +17,7 @@ mod window;
 pub use conv2d::{conv2d, Conv2dWeights};
 pub use depth_to_space::depth_to_space;
 pub use depthwise_conv2d::depthwise_conv2d;
-pub use elementwise::{add, prelu, relu, Activation};
+pub use elementwise::{add, add_prelu, prelu, relu, Activation};
 pub use madd::{Fused, Madd, Plain};
 pub use max_pool2d::max_pool2d;
 pub use pad::pad4;
