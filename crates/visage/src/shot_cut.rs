@@ -70,26 +70,43 @@ pub(crate) fn face_jumped(previous: &[[f64; 2]], current: &[[f64; 2]]) -> bool {
     moved > CUT_FACE_JUMP * size
 }
 
-/// Mean grey level (0–1) of each of 32 × 32 cells, from every second pixel of every second
-/// row, less the mean of the cells.
+/// Mean grey level (0–1, Rec. 601 weights) of each of 32 × 32 cells, from every second pixel
+/// of every second row, less the mean of the cells.
 fn thumbnail(frame: &RgbImage, out: &mut Vec<f32>) {
     let (w, h) = (frame.width() as usize, frame.height() as usize);
-    out.clear();
-    out.resize(THUMB * THUMB, 0.0);
-    let mut counts = vec![0u32; THUMB * THUMB];
+    // Integer sums of 299·R + 587·G + 114·B per cell (exact; a 16384² frame's largest cell sum
+    // is below 2^40), a division only per cell.
+    let mut sums = [0u64; THUMB * THUMB];
+    let mut counts = [0u32; THUMB * THUMB];
+    // The sampled columns of each cell, as runs, so that the inner loop has no division.
+    let mut runs: Vec<(usize, usize, usize)> = Vec::with_capacity(THUMB);
+    for x in (0..w).step_by(2) {
+        let cx = x * THUMB / w;
+        match runs.last_mut() {
+            Some((c, _, end)) if *c == cx => *end = (x + 2).min(w),
+            _ => runs.push((cx, x, (x + 2).min(w))),
+        }
+    }
     let raw = frame.as_raw();
     for y in (0..h).step_by(2) {
         let cy = y * THUMB / h;
-        for x in (0..w).step_by(2) {
-            let cell = cy * THUMB + x * THUMB / w;
-            let p = &raw[(y * w + x) * 3..(y * w + x) * 3 + 3];
-            out[cell] += (0.299 * p[0] as f32 + 0.587 * p[1] as f32 + 0.114 * p[2] as f32) / 255.0;
-            counts[cell] += 1;
+        let row = &raw[y * w * 3..(y + 1) * w * 3];
+        for &(cx, x0, x1) in &runs {
+            let cell = cy * THUMB + cx;
+            let sum: u32 = row[x0 * 3..x1 * 3]
+                .chunks(6)
+                .map(|p| 299 * u32::from(p[0]) + 587 * u32::from(p[1]) + 114 * u32::from(p[2]))
+                .sum();
+            sums[cell] += u64::from(sum);
+            counts[cell] += (x1 - x0).div_ceil(2) as u32;
         }
     }
-    for (v, &n) in out.iter_mut().zip(&counts) {
-        *v /= n.max(1) as f32;
-    }
+    out.clear();
+    out.extend(
+        sums.iter()
+            .zip(&counts)
+            .map(|(&s, &n)| (s as f64 / (f64::from(n.max(1)) * 255_000.0)) as f32),
+    );
     let mean = out.iter().sum::<f32>() / out.len() as f32;
     out.iter_mut().for_each(|v| *v -= mean);
 }
@@ -108,6 +125,43 @@ mod tests {
         assert!(!d.picture_cut(&nudged));
         assert!(d.picture_cut(&other));
         assert!(!d.picture_cut(&other));
+    }
+
+    /// The thumbnail is the definition: each cell's mean grey of every second pixel of every
+    /// second row (computed here pixel by pixel in f64), less the cells' mean.
+    #[test]
+    fn the_thumbnail_is_the_mean_grey_of_every_second_pixel() {
+        for (w, h) in [(64, 48), (37, 29), (1280, 720), (33, 3)] {
+            let frame = RgbImage::from_fn(w, h, |x, y| {
+                image::Rgb([(x * 7 + y) as u8, (y * 13) as u8, (x ^ y) as u8])
+            });
+            let (w, h) = (w as usize, h as usize);
+            let mut expected = vec![0.0f64; THUMB * THUMB];
+            let mut counts = vec![0u32; THUMB * THUMB];
+            let raw = frame.as_raw();
+            for y in (0..h).step_by(2) {
+                for x in (0..w).step_by(2) {
+                    let cell = (y * THUMB / h) * THUMB + x * THUMB / w;
+                    let p = &raw[(y * w + x) * 3..];
+                    expected[cell] +=
+                        (0.299 * p[0] as f64 + 0.587 * p[1] as f64 + 0.114 * p[2] as f64) / 255.0;
+                    counts[cell] += 1;
+                }
+            }
+            for (v, &n) in expected.iter_mut().zip(&counts) {
+                *v /= n.max(1) as f64;
+            }
+            let mean = expected.iter().sum::<f64>() / expected.len() as f64;
+            let mut got = Vec::new();
+            thumbnail(&frame, &mut got);
+            for (a, b) in got.iter().zip(&expected) {
+                assert!(
+                    (*a as f64 - (b - mean)).abs() < 1e-6,
+                    "{w}×{h}: {a} vs {}",
+                    b - mean
+                );
+            }
+        }
     }
 
     #[test]
