@@ -107,12 +107,12 @@ sinfo -h -o %T 2>/dev/null | grep -qE '^(idle|mixed|allocated)' ||
   skip "Slurm did not start here: $(tail -n 3 "$tmp/slurmctld.log" "$tmp/slurmd.log" 2>/dev/null | tr '\n' ' ')"
 echo "test_slurm: single-node cluster up ($host, $cpus CPUs, port $port)"
 
-# 12 clips of 8 frames, cut from the sample video.
+# 12 clips of 16 frames, cut from the sample video.
 clips=$tmp/work/clips
 mkdir -p "$clips"
 : > "$tmp/work/manifest.txt"
 for i in $(seq 0 11); do
-  ffmpeg -v error -y -ss "$(awk "BEGIN { print 0.25 * $i }")" -i "$video" -frames:v 8 -vf scale=240:240 \
+  ffmpeg -v error -y -ss "$(awk "BEGIN { print 0.25 * $i }")" -i "$video" -frames:v 16 -vf scale=240:240 \
     -c:v libx264 -preset ultrafast -pix_fmt yuv420p "$clips/clip$i.mp4"
   echo "clips/clip$i.mp4" >> "$tmp/work/manifest.txt"
 done
@@ -125,11 +125,11 @@ submit() {
 job=$(submit)
 echo "test_slurm: submitted array job $job (4 tasks)"
 # Cancel the task that is running once a clip of it is half written (a point cache with
-# frames in it, under out/.partial/).
+# frames in it, still under its temporary name, in out/.partial/).
 victim=
 for _ in $(seq 3000); do
-  if compgen -G "$out/.partial/*/sequence.pc2" >/dev/null; then
-    for f in "$out"/.partial/*/sequence.pc2; do
+  if compgen -G "$out/.partial/*/sequence.pc2.tmp" >/dev/null; then
+    for f in "$out"/.partial/*/sequence.pc2.tmp; do
       if [ -s "$f" ]; then
         victim=$(squeue -h -j "$job" -t R -o %K | head -n 1)
         break

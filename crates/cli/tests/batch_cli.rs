@@ -123,14 +123,14 @@ fn batch(manifest: &Path, out: &Path, extra: &[&str], models: &Path) -> Command 
 fn four_shards_with_one_killed_and_restarted_do_every_clip_once() {
     let (models, video) = inputs();
     let tmp = tempfile::tempdir().unwrap();
-    let manifest = cut_clips(&video, &tmp.path().join("clips"), 20, 6);
+    let manifest = cut_clips(&video, &tmp.path().join("clips"), 20, 10);
     let single = tmp.path().join("single");
     let o = batch(&manifest, &single, &[], &models).output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     let summary: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(summary["done"], 20, "{summary}");
-    assert_eq!(summary["frames"], 120, "{summary}");
+    assert_eq!(summary["frames"], 200, "{summary}");
     assert!(summary["frames_per_hour_per_core"].as_f64().unwrap() > 0.0);
 
     let out = tmp.path().join("sharded");
@@ -147,8 +147,8 @@ fn four_shards_with_one_killed_and_restarted_do_every_clip_once() {
         .unwrap()
     };
     let mut workers: Vec<_> = (0..4).map(spawn).collect();
-    // Kill shard 1's worker once it has finished a clip and the next has a point cache in
-    // progress.
+    // Kill shard 1's worker once it has finished a clip and the next one's run is part-way:
+    // its point cache has frames but is still under its temporary name.
     let shard1: Vec<String> = {
         let text = std::fs::read_to_string(&manifest).unwrap();
         text.lines()
@@ -166,7 +166,8 @@ fn four_shards_with_one_killed_and_restarted_do_every_clip_once() {
             d.filter_map(|e| e.ok()).find(|e| {
                 let name = e.file_name().to_string_lossy().into_owned();
                 name.split('.').nth(1) == Some(&pid.to_string())
-                    && std::fs::metadata(e.path().join("sequence.pc2")).is_ok_and(|m| m.len() > 0)
+                    && std::fs::metadata(e.path().join("sequence.pc2.tmp"))
+                        .is_ok_and(|m| m.len() > 0)
             })
         });
         let one_done = shard1
