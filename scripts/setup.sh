@@ -5,9 +5,9 @@
 #                             visage (release), fetch the pinned MediaPipe models (npm, and the
 #                             iris network and full-range detector from PyPI), run the sample
 #                             job into out/sample/
-#   scripts/setup.sh --ci     packages, viewer and models only (what the test suite needs), and
-#                             for the batch tests a Slurm cluster's packages and the Kubernetes
-#                             schema validator (PyPI, under target/)
+#   scripts/setup.sh --ci     packages, viewer, models and the Kubernetes schema validator (PyPI,
+#                             under target/) only — what the test suite needs —, and the Debian
+#                             packages of the single-node Slurm cluster the batch test starts
 #
 # Needs: a Rust toolchain (cargo), Node.js/npm (for `npm pack` and the viewer's pinned
 # packages), Python 3 with pip (for `pip download` of the mediapipe wheel), apt-get as root (or
@@ -72,15 +72,15 @@ fi
 # detector from the PyPI wheel mediapipe==0.10.21, pinned and sha256-checked, into models/.
 "$bin" models fetch
 
-if [ "$mode" = ci ]; then
-  # The Kubernetes schema validator for the deploy files' test (scripts/test_deploy.sh).
-  venv="$target_dir/deploy-venv"
-  if ! "$venv/bin/kubernetes-validate" --version >/dev/null 2>&1; then
-    python3 -m venv "$venv"
-    "$venv/bin/pip" install -q kubernetes-validate==1.37.0
-  fi
-  exit 0
+# The Kubernetes schema validator for the deploy files' test (scripts/test_deploy.sh), pinned,
+# in a virtual environment under the build folder.
+venv="$target_dir/deploy-venv"
+if ! "$venv/bin/kubernetes-validate" --version >/dev/null 2>&1; then
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install -q kubernetes-validate==1.37.0
 fi
+
+[ "$mode" = ci ] && exit 0
 
 # The main job on a sample: `visage run` on a real clip → a fused metric face mesh per frame, and
 # shaded previews of a few frames (fused and raw) a person can open.
