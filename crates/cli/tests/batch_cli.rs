@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{s, visage};
+use common::{inputs, json, s, visage};
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -12,22 +12,6 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
-
-/// The model folder and the 480×480 sample clip.
-#[track_caller]
-fn inputs() -> (PathBuf, PathBuf) {
-    let models = visage_testdata::models_dir();
-    for file in visage_testdata::MODEL_FILES {
-        visage_testdata::require(models.join(file));
-    }
-    let clip =
-        visage_testdata::require(visage_testdata::shared_dir().join("data/video/lp_d18.mp4"));
-    (models, clip)
-}
-
-fn json(path: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
 
 /// `n` clips of `frames` frames each, cut from `video` at different times into `dir`
 /// (`dir/day{i % 3}/clip{i}.mp4`, downscaled so that the tests stay quick); the manifest
@@ -318,6 +302,7 @@ fn failed_clips_say_why_and_the_others_finish() {
         (again["skipped"].as_u64(), again["failed"].as_u64()),
         (Some(2), Some(3))
     );
+    assert_eq!(again["failed_before"], 3);
     assert!(String::from_utf8_lossy(&o.stderr).contains("failed before"));
     let o = batch(&manifest, &out, &["--retry-failed"], &models)
         .output()

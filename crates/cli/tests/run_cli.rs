@@ -5,29 +5,12 @@
 
 mod common;
 
-use common::{run_ok, s, visage};
+use common::{inputs, json, run_ok, s, visage};
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use serde_json::Value;
-
-/// The model folder and the 480×480 sample clip (the tests using them are ignored without them
-/// or without FFmpeg).
-#[track_caller]
-fn inputs() -> (PathBuf, PathBuf) {
-    let models = visage_testdata::models_dir();
-    for file in visage_testdata::MODEL_FILES {
-        visage_testdata::require(models.join(file));
-    }
-    let clip =
-        visage_testdata::require(visage_testdata::shared_dir().join("data/video/lp_d18.mp4"));
-    (models, clip)
-}
-
-fn json(path: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
 
 /// `visage run` on the first 5 frames of `clip` into `out`, with `extra` options.
 fn run_five_frames(clip: &Path, models: &Path, out: &Path, extra: &[&str]) {

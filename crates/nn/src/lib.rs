@@ -10,12 +10,12 @@
 //!
 //! | TFLite operator | kernel |
 //! |---|---|
-//! | `CONV_2D` | [`ops::conv2d`]: 1×1 stride-1 as a register-blocked GEMM (4 pixels × 16/8/4 output channels), other sizes through a small im2col; fused `RELU` applied to the register block before the store |
-//! | `DEPTHWISE_CONV_2D` | [`ops::depthwise_conv2d`] (depth multiplier 1; 3×3 interior rows with the nine weight vectors in registers) |
+//! | `CONV_2D` | [`ops::conv2d`]: 1×1 stride-1 as a register-blocked GEMM (4 pixels × 16/8/4 output channels; with AVX2+FMA 6 pixels × 16 channels in explicit vector code), other sizes read in place where the window is inside the input and through a small im2col at the border; fused `RELU` applied to the register block before the store |
+//! | `DEPTHWISE_CONV_2D` | [`ops::depthwise_conv2d`] (depth multiplier 1; 3×3 interior rows with the nine weight vectors in registers; with AVX2+FMA four columns × eight channels in explicit vector code) |
 //! | `MAX_POOL_2D` | [`ops::max_pool2d`] |
 //! | `PAD` | [`ops::pad4`] (constant int32 paddings) |
 //! | `ADD` | [`ops::add`] (same shapes, no broadcasting; optional fused `RELU`) |
-//! | `PRELU` / `RELU` | [`ops::prelu`] (one slope per channel) / [`ops::relu`] |
+//! | `PRELU` / `RELU` | [`ops::prelu`] (one slope per channel) / [`ops::relu`]; an `ADD` whose sum only the next `PRELU` reads runs as one pass ([`ops::add_prelu`]) |
 //! | `RESIZE_BILINEAR` | [`ops::resize_bilinear`] (constant size; `half_pixel_centers` or `align_corners`, TensorFlow's sampling) |
 //! | `DEPTH_TO_SPACE` | [`ops::depth_to_space`] (TensorFlow's DCR order) |
 //! | `RESHAPE`, `CONCATENATION` | copies |
@@ -39,7 +39,9 @@
 //! The kernels are generic over the multiply-add ([`ops::Madd`]). On x86-64 CPUs with AVX2 and
 //! FMA, [`Network::run`] calls a copy of the step loop compiled with those target features and
 //! fused multiply-adds ([`ops::Fused`]), chosen at run time; elsewhere the portable path
-//! ([`ops::Plain`]) runs. The two agree to float rounding.
+//! ([`ops::Plain`]) runs. The two agree to float rounding. The explicit AVX2 kernels run only
+//! with fused multiply-adds and keep the generic kernels' order of operations, so they give the
+//! generic fused path's values.
 //!
 //! # Benches
 //! `cargo bench -p visage-nn` times single convolution layers on random data (fixed seed), through

@@ -1,7 +1,7 @@
 //! Helpers shared by the CLI tests: run the real `visage` binary.
 #![allow(dead_code)]
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Runs `visage ARGS…` and returns its output.
@@ -25,4 +25,22 @@ pub fn run_ok(args: &[&str]) {
 /// A path as a command-line argument.
 pub fn s(p: &Path) -> &str {
     p.to_str().unwrap()
+}
+
+/// The model folder and the 480×480 sample clip (the tests using them are ignored without them
+/// or without FFmpeg).
+#[track_caller]
+pub fn inputs() -> (PathBuf, PathBuf) {
+    let models = visage_testdata::models_dir();
+    for file in visage_testdata::MODEL_FILES {
+        visage_testdata::require(models.join(file));
+    }
+    let clip =
+        visage_testdata::require(visage_testdata::shared_dir().join("data/video/lp_d18.mp4"));
+    (models, clip)
+}
+
+/// A JSON file's contents.
+pub fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }

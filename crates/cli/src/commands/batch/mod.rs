@@ -158,6 +158,7 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
     let done = count(&|o| matches!(o, Outcome::Done { .. }));
     let skipped = count(&|o| *o == Outcome::Skipped);
     let failed = count(&|o| matches!(o, Outcome::Failed { .. }));
+    let failed_before = count(&|o| *o == Outcome::Failed { now: false });
     let frames: u64 = results
         .iter()
         .map(|(_, o)| match o {
@@ -173,6 +174,7 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
         "done": done,
         "skipped": skipped,
         "failed": failed,
+        "failed_before": failed_before,
         "not_run": mine.len() - results.len(),
         "frames": frames,
         "seconds": seconds,

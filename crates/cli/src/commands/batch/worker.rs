@@ -284,10 +284,7 @@ impl Worker {
                 .with_context(|| format!("{}: cannot create", parent.display()))?;
         }
         if folder.exists() {
-            if folder.join(record::DONE).is_file()
-                && !tmp.join(record::DONE).is_file()
-                && record::not_done(folder, &clip.input, &options_of(clip, &self.common)).is_none()
-            {
+            if record::not_done(folder, &clip.input, &options_of(clip, &self.common)).is_none() {
                 std::fs::remove_dir_all(tmp).ok();
                 return Ok(());
             }
