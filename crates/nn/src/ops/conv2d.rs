@@ -66,7 +66,26 @@ pub fn conv2d<M: Madd>(
     assert_eq!(y.len(), win.out_h * win.out_w * co, "conv2d output size");
     assert!(patch.len() >= red, "conv2d scratch too small");
     let pointwise = win.k_h == 1 && win.k_w == 1 && win.stride_h == 1 && win.stride_w == 1;
+    // The AVX-512 kernel, for fused multiply-adds only (see `Madd::FUSED`).
+    #[cfg(target_arch = "x86_64")]
+    let avx512 = M::FUSED && super::avx512::available();
     if pointwise {
+        #[cfg(target_arch = "x86_64")]
+        if avx512 {
+            let at = super::avx512::InPlace {
+                base: 0,
+                step: ci,
+                k_h: 1,
+                row: 0,
+                run: ci,
+            };
+            // SAFETY: the CPU has AVX-512F (tested above).
+            #[allow(unsafe_code)]
+            unsafe {
+                super::avx512::conv_rows(x, &at, x.len() / ci, &wts.w, &wts.bias, relu, y, 0)
+            };
+            return;
+        }
         // A GEMM `[pixels, C_in] × [C_in, C_out]`: with AVX2 and fused multiply-adds, blocks of
         // 16 output channels of `avx2::ROWS` pixels by explicit vector code, else ROWS pixels at
         // a time (see `Madd::FUSED`).
@@ -137,6 +156,23 @@ pub fn conv2d<M: Madd>(
         }
         // Every kernel row is inside the input here, so the window's top row is too.
         let iy0 = oy * win.stride_h - win.pad_top;
+        #[cfg(target_arch = "x86_64")]
+        if avx512 {
+            let at = super::avx512::InPlace {
+                base: (iy0 * win.in_w + lo * win.stride_w - win.pad_left) * ci,
+                step: win.stride_w * ci,
+                k_h: win.k_h,
+                row: win.in_w * ci,
+                run: win.k_w * ci,
+            };
+            let y0 = (oy * win.out_w + lo) * co;
+            // SAFETY: the CPU has AVX-512F (tested above).
+            #[allow(unsafe_code)]
+            unsafe {
+                super::avx512::conv_rows(x, &at, hi - lo, &wts.w, &wts.bias, relu, y, y0)
+            };
+            continue;
+        }
         let mut ox = lo;
         while ox < hi {
             let base = (iy0 * win.in_w + ox * win.stride_w - win.pad_left) * ci;

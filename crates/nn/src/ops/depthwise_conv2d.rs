@@ -39,6 +39,8 @@ pub fn depthwise_conv2d<M: Madd>(
     let avx2 = M::FUSED
         && std::arch::is_x86_feature_detected!("avx2")
         && std::arch::is_x86_feature_detected!("fma");
+    #[cfg(target_arch = "x86_64")]
+    let avx512 = M::FUSED && super::avx512::available();
     for oy in 0..win.out_h {
         // Valid taps of this row: ky with 0 ≤ oy·s + ky − pad < in_h.
         let (ky0, ky1) = valid_taps(oy, win.stride_h, win.pad_top, win.k_h, win.in_h);
@@ -49,6 +51,22 @@ pub fn depthwise_conv2d<M: Madd>(
         }
         if hi > lo {
             let iy0 = oy * win.stride_h - win.pad_top;
+            #[cfg(target_arch = "x86_64")]
+            if avx512 {
+                let at = super::avx512::Row3 {
+                    row: win.in_w * c,
+                    step: win.stride_w * c,
+                    x0: iy0 * win.in_w * c + (lo * win.stride_w - win.pad_left) * c,
+                    y0: (oy * win.out_w + lo) * c,
+                    n: hi - lo,
+                };
+                // SAFETY: `avx512` is set only where the CPU has AVX-512F.
+                #[allow(unsafe_code)]
+                unsafe {
+                    super::avx512::depthwise_row3(x, w, b, &at, y)
+                };
+                continue;
+            }
             let mut cb = 0;
             #[cfg(target_arch = "x86_64")]
             if avx2 {

@@ -4,6 +4,8 @@
 //! TFLite. Inner loops run over contiguous channels so that the compiler vectorises them.
 //! Kernels write into caller-owned outputs and never allocate.
 
+#[cfg(target_arch = "x86_64")]
+mod avx512;
 mod conv2d;
 mod depth_to_space;
 mod depthwise_conv2d;

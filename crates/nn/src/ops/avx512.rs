@@ -1,0 +1,385 @@
+//! The convolutions' hot loops with AVX-512 (16 lanes, 32 vector registers), chosen at run time
+//! where the CPU has it and the network runs with fused multiply-adds (see `Madd::FUSED`):
+//!
+//! - [`conv_rows`]: a GEMM register block of 12 pixels × 32 output channels (24 accumulators)
+//!   whose left-hand rows are read in place from the input, so one kernel serves the 1×1
+//!   convolutions and the interior windows of the k×k ones;
+//! - [`depthwise_row3`]: the depthwise 3×3 row sweep, 16 channels and 8 output columns at a time.
+//!
+//! Each keeps the generic kernels' order of multiply-adds per output value (the bias, then the
+//! taps in the weights' order), so the outputs are the same values bit for bit as the AVX2 and
+//! generic code with fused multiply-adds. Channel counts that are not multiples of 16 are
+//! handled with masked loads and stores, which touch no memory in their masked-off lanes.
+#![allow(unsafe_code)]
+
+use std::arch::x86_64::{
+    __m512, __mmask16, _mm512_fmadd_ps, _mm512_mask_storeu_ps, _mm512_maskz_loadu_ps,
+    _mm512_max_ps, _mm512_set1_ps, _mm512_setzero_ps,
+};
+
+/// Whether this CPU runs the kernels of this module.
+pub(super) fn available() -> bool {
+    std::arch::is_x86_feature_detected!("avx512f")
+}
+
+/// The mask of the first `n.min(16)` lanes.
+#[inline(always)]
+fn lanes(n: usize) -> __mmask16 {
+    if n >= 16 {
+        0xffff
+    } else {
+        (1u16 << n) - 1
+    }
+}
+
+/// Where the left-hand rows of a GEMM lie in the input: pixel `p`'s reduction values are the
+/// `k_h` runs `x[base + p·step + ky·row ..][..run]`, `ky < k_h`, one after another (for a 1×1
+/// convolution `k_h = 1` and `run = step = C_in`; for a k×k window inside the input, `row` is
+/// an input row's length and `run = k_w·C_in`).
+pub(super) struct InPlace {
+    pub base: usize,
+    pub step: usize,
+    pub k_h: usize,
+    pub row: usize,
+    pub run: usize,
+}
+
+/// Pixels per register block.
+const ROWS: usize = 12;
+
+/// `y[y0 + p·C_out + o] = b[o] + Σ_r a[p, r] · w[r·C_out + o]` (then `max(·, 0)` if `relu`)
+/// for the `n` pixels `p` whose rows `a[p, ·]` [`InPlace`] describes; `C_out = b.len()`.
+///
+/// # Panics
+/// If a read or write would leave `x`, `w`, `b` or `y`.
+#[allow(clippy::too_many_arguments)]
+#[target_feature(enable = "avx512f")]
+pub(super) fn conv_rows(
+    x: &[f32],
+    at: &InPlace,
+    n: usize,
+    w: &[f32],
+    b: &[f32],
+    relu: bool,
+    y: &mut [f32],
+    y0: usize,
+) {
+    let co = b.len();
+    let red = at.k_h * at.run;
+    if n == 0 || co == 0 {
+        return;
+    }
+    assert!(red > 0 && w.len() >= red * co, "conv_rows weights");
+    assert!(
+        at.base + (n - 1) * at.step + (at.k_h - 1) * at.row + at.run <= x.len(),
+        "conv_rows input"
+    );
+    assert!(y0 + n * co <= y.len(), "conv_rows output");
+    // The asserts bound every index below: pixel rows below n, runs inside x, weight rows below
+    // red, output channels below co (the masks keep the loads and stores of a partial block of
+    // channels inside it).
+    let (xp, wp, yp) = (x.as_ptr(), w.as_ptr(), y.as_mut_ptr());
+    let mut p0 = 0;
+    while p0 < n {
+        let left = n - p0;
+        // SAFETY: pixels p0 .. p0 + R with R ≤ left (asserted bounds above).
+        unsafe {
+            if left >= ROWS {
+                pixels::<ROWS>(xp, at, p0, wp, b, relu, yp, y0);
+                p0 += ROWS;
+            } else if left >= 4 {
+                pixels::<4>(xp, at, p0, wp, b, relu, yp, y0);
+                p0 += 4;
+            } else {
+                pixels::<1>(xp, at, p0, wp, b, relu, yp, y0);
+                p0 += 1;
+            }
+        }
+    }
+}
+
+/// Every output channel of pixels `p0 .. p0 + R` of [`conv_rows`]: blocks of 32 channels, then
+/// one of up to 16.
+///
+/// # Safety
+/// The CPU has AVX-512F; pixels `p0 .. p0 + R` lie within `conv_rows`' checked bounds.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+#[target_feature(enable = "avx512f")]
+unsafe fn pixels<const R: usize>(
+    xp: *const f32,
+    at: &InPlace,
+    p0: usize,
+    wp: *const f32,
+    b: &[f32],
+    relu: bool,
+    yp: *mut f32,
+    y0: usize,
+) {
+    let co = b.len();
+    let mut ob = 0;
+    while ob + 16 < co {
+        let m = [0xffff, lanes(co - ob - 16)];
+        // SAFETY: as the caller's; channels ob .. ob + 32 masked to below co.
+        unsafe { block::<R, 2>(xp, at, p0, wp, b, ob, m, relu, yp, y0) };
+        ob += 32;
+    }
+    if ob < co {
+        // SAFETY: as above, channels ob .. ob + 16 masked to below co.
+        unsafe { block::<R, 1>(xp, at, p0, wp, b, ob, [lanes(co - ob)], relu, yp, y0) };
+    }
+}
+
+/// The `R × 16·NV` register block: pixels `p0 .. p0 + R`, channels `ob ..` under `masks`.
+///
+/// # Safety
+/// As [`pixels`]; the masks' lanes lie below `C_out`.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+#[target_feature(enable = "avx512f")]
+unsafe fn block<const R: usize, const NV: usize>(
+    xp: *const f32,
+    at: &InPlace,
+    p0: usize,
+    wp: *const f32,
+    b: &[f32],
+    ob: usize,
+    masks: [__mmask16; NV],
+    relu: bool,
+    yp: *mut f32,
+    y0: usize,
+) {
+    let co = b.len();
+    // Every load and store below stays within the bounds the caller guarantees: bias and
+    // weight rows at channels the masks keep below C_out, weight rows below the reduction
+    // length, input runs of pixels p0 .. p0 + R.
+    // SAFETY: as above.
+    let bias: [__m512; NV] = std::array::from_fn(|v| unsafe {
+        _mm512_maskz_loadu_ps(masks[v], b.as_ptr().add(ob + 16 * v))
+    });
+    let mut acc = [bias; R];
+    let mut wr_row = wp.wrapping_add(ob);
+    for ky in 0..at.k_h {
+        let a = xp.wrapping_add(at.base + p0 * at.step + ky * at.row);
+        for t in 0..at.run {
+            // SAFETY: as above.
+            let wr: [__m512; NV] = std::array::from_fn(|v| unsafe {
+                _mm512_maskz_loadu_ps(masks[v], wr_row.add(16 * v))
+            });
+            for (p, row) in acc.iter_mut().enumerate() {
+                // SAFETY: as above.
+                let av = _mm512_set1_ps(unsafe { *a.add(p * at.step + t) });
+                for v in 0..NV {
+                    row[v] = _mm512_fmadd_ps(av, wr[v], row[v]);
+                }
+            }
+            wr_row = wr_row.wrapping_add(co);
+        }
+    }
+    if relu {
+        let zero = _mm512_setzero_ps();
+        for row in acc.iter_mut() {
+            for v in row.iter_mut() {
+                *v = _mm512_max_ps(*v, zero);
+            }
+        }
+    }
+    for (p, row) in acc.iter().enumerate() {
+        for v in 0..NV {
+            // SAFETY: as above.
+            unsafe {
+                _mm512_mask_storeu_ps(yp.add(y0 + (p0 + p) * co + ob + 16 * v), masks[v], row[v])
+            };
+        }
+    }
+}
+
+/// Where one depthwise row sweep reads and writes: input rows are `row` values apart,
+/// consecutive output columns read `step` values apart; `x0` is the top-left tap of the first
+/// column (channel 0) and `y0` its output; `n` columns.
+pub(super) struct Row3 {
+    pub row: usize,
+    pub step: usize,
+    pub x0: usize,
+    pub y0: usize,
+    pub n: usize,
+}
+
+/// Output columns per register block of [`depthwise_row3`].
+const COLS: usize = 8;
+
+/// Every channel of `at.n` output columns of a depthwise 3×3 convolution whose windows lie
+/// inside the input: `y = b + Σ_{ky, kx} w[ky, kx] · x[tap]`, taps in the weights' order.
+///
+/// # Panics
+/// If a read or write would leave `x`, `w`, `b` or `y`.
+#[target_feature(enable = "avx512f")]
+pub(super) fn depthwise_row3(x: &[f32], w: &[f32], b: &[f32], at: &Row3, y: &mut [f32]) {
+    let c = b.len();
+    if at.n == 0 || c == 0 {
+        return;
+    }
+    let last = at.n - 1;
+    assert!(
+        at.x0 + last * at.step + 2 * at.row + 3 * c <= x.len(),
+        "depthwise_row3 input"
+    );
+    assert!(at.y0 + at.n * c <= y.len(), "depthwise_row3 output");
+    assert!(w.len() >= 9 * c, "depthwise_row3 weights");
+    let (xp, yp) = (x.as_ptr(), y.as_mut_ptr());
+    let mut cb = 0;
+    while cb < c {
+        let m = lanes(c - cb);
+        // The asserts bound every index: tap (2, 2) of the last column, the last column's
+        // output, weight tap 8, all at channels below c (masked).
+        // SAFETY: as above.
+        let (wk, bias): ([__m512; 9], __m512) = unsafe {
+            (
+                std::array::from_fn(|t| _mm512_maskz_loadu_ps(m, w.as_ptr().add(t * c + cb))),
+                _mm512_maskz_loadu_ps(m, b.as_ptr().add(cb)),
+            )
+        };
+        let mut p = 0;
+        // SAFETY: columns p .. p + N below at.n, channels masked below c.
+        unsafe {
+            while p + COLS <= at.n {
+                columns::<COLS>(xp, &wk, bias, m, at, c, cb, p, yp);
+                p += COLS;
+            }
+            while p < at.n {
+                columns::<1>(xp, &wk, bias, m, at, c, cb, p, yp);
+                p += 1;
+            }
+        }
+        cb += 16;
+    }
+}
+
+/// Channels `cb ..` (mask `m`) of output columns `p .. p + N` of [`depthwise_row3`]: N
+/// independent chains of nine multiply-adds.
+///
+/// # Safety
+/// The CPU has AVX-512F; the columns and channels lie within `depthwise_row3`'s checked bounds.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+#[target_feature(enable = "avx512f")]
+unsafe fn columns<const N: usize>(
+    xp: *const f32,
+    wk: &[__m512; 9],
+    bias: __m512,
+    m: __mmask16,
+    at: &Row3,
+    c: usize,
+    cb: usize,
+    p: usize,
+    yp: *mut f32,
+) {
+    let xb = at.x0 + p * at.step + cb;
+    let mut acc = [bias; N];
+    for ky in 0..3 {
+        for kx in 0..3 {
+            let xi = xb + ky * at.row + kx * c;
+            for (q, a) in acc.iter_mut().enumerate() {
+                // SAFETY: as the caller's.
+                let xv = unsafe { _mm512_maskz_loadu_ps(m, xp.add(xi + q * at.step)) };
+                *a = _mm512_fmadd_ps(xv, wk[ky * 3 + kx], *a);
+            }
+        }
+    }
+    for (q, a) in acc.iter().enumerate() {
+        // SAFETY: as the caller's.
+        unsafe { _mm512_mask_storeu_ps(yp.add(at.y0 + (p + q) * c + cb), m, *a) };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pseudo(n: usize, seed: u32) -> Vec<f32> {
+        let mut s = seed;
+        (0..n)
+            .map(|_| {
+                s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (s >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+            })
+            .collect()
+    }
+
+    /// The kernels give the values of scalar fused multiply-adds in the generic kernels' order,
+    /// bit for bit, for channel counts with and without a partial block of 16 and pixel counts
+    /// with whole register blocks and remainders.
+    #[test]
+    fn same_values_as_scalar_fused_multiply_adds() {
+        if !available() {
+            eprintln!("skipped: this CPU has no AVX-512F");
+            return;
+        }
+        for &(n, k_h, run, step, row, co) in &[
+            (29, 1, 40, 40, 0, 48),
+            (13, 1, 16, 16, 0, 16),
+            (7, 3, 9, 6, 30, 37),
+            (25, 2, 8, 8, 40, 20),
+            (3, 1, 5, 5, 0, 3),
+        ] {
+            let at = InPlace {
+                base: 2,
+                step,
+                k_h,
+                row,
+                run,
+            };
+            let red = k_h * run;
+            let x = pseudo(2 + (n - 1) * step + (k_h - 1) * row + run, 1);
+            let w = pseudo(red * co, 2);
+            let b = pseudo(co, 3);
+            let mut y = vec![7.0; 5 + n * co];
+            for relu in [false, true] {
+                // SAFETY: the CPU has AVX-512F (tested above).
+                unsafe { conv_rows(&x, &at, n, &w, &b, relu, &mut y, 5) };
+                for p in 0..n {
+                    for o in 0..co {
+                        let mut acc = b[o];
+                        for ky in 0..k_h {
+                            for t in 0..run {
+                                let a = x[at.base + p * step + ky * row + t];
+                                acc = a.mul_add(w[(ky * run + t) * co + o], acc);
+                            }
+                        }
+                        let want = if relu { acc.max(0.0) } else { acc };
+                        assert_eq!(y[5 + p * co + o].to_bits(), want.to_bits());
+                    }
+                }
+                assert_eq!(y[..5], [7.0; 5]);
+            }
+        }
+        for &(n, c, stride) in &[(19, 16, 1), (9, 21, 2), (4, 48, 1), (1, 5, 1)] {
+            let (row, step) = ((n * stride + 2) * c, stride * c);
+            let at = Row3 {
+                row,
+                step,
+                x0: 3,
+                y0: 1,
+                n,
+            };
+            let x = pseudo(3 + (n - 1) * step + 2 * row + 3 * c, 4);
+            let w = pseudo(9 * c, 5);
+            let b = pseudo(c, 6);
+            let mut y = vec![0.0; 1 + n * c];
+            // SAFETY: the CPU has AVX-512F (tested above).
+            unsafe { depthwise_row3(&x, &w, &b, &at, &mut y) };
+            for p in 0..n {
+                for ch in 0..c {
+                    let mut acc = b[ch];
+                    for ky in 0..3 {
+                        for kx in 0..3 {
+                            let xv = x[3 + p * step + ky * row + kx * c + ch];
+                            acc = xv.mul_add(w[(ky * 3 + kx) * c + ch], acc);
+                        }
+                    }
+                    assert_eq!(y[1 + p * c + ch].to_bits(), acc.to_bits());
+                }
+            }
+        }
+    }
+}
