@@ -3,8 +3,8 @@
 
 use image::RgbImage;
 
-use crate::bilinear::sample_rgb;
 use crate::Roi;
+use visage_nn::bilinear::{sample_rgb, sample_rgb_lanes};
 
 /// Fills `out` (`side × side × 3`, row-major RGB) with the ROI of `image`, values `pixel / 255`.
 ///
@@ -28,14 +28,28 @@ pub fn crop_roi(image: &RgbImage, roi: &Roi, side: usize, out: &mut [f32]) {
     let inv = 1.0 / side as f32;
     let max_x = (w - 1) as f32;
     let max_y = (h - 1) as f32;
-    for j in 0..side {
+    let at = |i: usize, y: f32| {
+        let x = i as f32 * inv - 0.5;
+        let fx = (roi.center[0] + (c * x - s * y) * roi.size).clamp(0.0, max_x);
+        let fy = (roi.center[1] + (s * x + c * y) * roi.size).clamp(0.0, max_y);
+        (fx, fy)
+    };
+    for (j, row) in out.chunks_exact_mut(side * 3).enumerate() {
         let y = j as f32 * inv - 0.5;
-        for i in 0..side {
-            let x = i as f32 * inv - 0.5;
-            let fx = (roi.center[0] + (c * x - s * y) * roi.size).clamp(0.0, max_x);
-            let fy = (roi.center[1] + (s * x + c * y) * roi.size).clamp(0.0, max_y);
-            let o = (j * side + i) * 3;
-            sample_rgb(src, w, h, fx, fy, &mut out[o..o + 3]);
+        // Eight pixels at a time, then the rest one by one.
+        let mut lanes = row.chunks_exact_mut(24);
+        for (k, o) in (&mut lanes).enumerate() {
+            let (mut fx, mut fy) = ([0.0; 8], [0.0; 8]);
+            for q in 0..8 {
+                (fx[q], fy[q]) = at(8 * k + q, y);
+            }
+            let o: &mut [f32; 24] = o.try_into().expect("24 values");
+            sample_rgb_lanes(src, w, h, &fx, &fy, o);
+        }
+        let done = side / 8 * 8;
+        for (q, o) in lanes.into_remainder().chunks_exact_mut(3).enumerate() {
+            let (fx, fy) = at(done + q, y);
+            sample_rgb(src, w, h, fx, fy, o);
         }
     }
 }

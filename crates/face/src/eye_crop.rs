@@ -7,8 +7,8 @@
 
 use image::RgbImage;
 
-use crate::bilinear::sample_rgb;
 use crate::IRIS_INPUT;
+use visage_nn::bilinear::sample_rgb_lanes;
 
 /// Side of the eye crop divided by the distance between the eye's corners.
 pub const EYE_CROP_SCALE: f32 = 2.3;
@@ -116,12 +116,15 @@ impl EyeCrop {
         assert!(w > 0 && h > 0, "empty image");
         let src = image.as_raw();
         let (max_x, max_y) = ((w - 1) as f32, (h - 1) as f32);
-        for j in 0..side {
-            let fy = (self.y0 + self.scale * j as f32).clamp(0.0, max_y);
-            for i in 0..side {
-                let fx = self.frame_x(i as f32).clamp(0.0, max_x);
-                let o = (j * side + i) * 3;
-                sample_rgb(src, w, h, fx, fy, &mut out[o..o + 3]);
+        // The input's side is a multiple of eight: eight pixels at a time.
+        const _: () = assert!(IRIS_INPUT.is_multiple_of(8));
+        for (j, row) in out.chunks_exact_mut(side * 3).enumerate() {
+            let fy = [(self.y0 + self.scale * j as f32).clamp(0.0, max_y); 8];
+            for (k, o) in row.chunks_exact_mut(24).enumerate() {
+                let fx: [f32; 8] =
+                    std::array::from_fn(|q| self.frame_x((8 * k + q) as f32).clamp(0.0, max_x));
+                let o: &mut [f32; 24] = o.try_into().expect("24 values");
+                sample_rgb_lanes(src, w, h, &fx, &fy, o);
             }
         }
     }

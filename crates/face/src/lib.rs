@@ -17,7 +17,6 @@ pub use model_files::{models_dir, ModelFile};
 // The inference engine lives in `visage-nn`; re-exported under its former paths.
 pub use visage_nn::{float16, network, ops, tflite, Network, NnError};
 pub mod anchors;
-mod bilinear;
 pub mod landmark_network;
 
 pub use landmark_network::{CropLandmarks, LandmarkNetwork, LANDMARK_INPUT, NUM_LANDMARKS};
