@@ -13,8 +13,8 @@
 #![allow(unsafe_code)]
 
 use std::arch::x86_64::{
-    __m512, __mmask16, _mm512_fmadd_ps, _mm512_mask_storeu_ps, _mm512_maskz_loadu_ps,
-    _mm512_max_ps, _mm512_set1_ps, _mm512_setzero_ps,
+    __m512, __mmask16, _mm512_fmadd_ps, _mm512_loadu_ps, _mm512_mask_storeu_ps,
+    _mm512_maskz_loadu_ps, _mm512_max_ps, _mm512_set1_ps, _mm512_setzero_ps,
 };
 
 /// Whether this CPU runs the kernels of this module.
@@ -47,8 +47,52 @@ pub(super) struct InPlace {
 /// Pixels per register block.
 const ROWS: usize = 12;
 
+/// Output channels per weight panel.
+const PANEL: usize = 32;
+
+/// The width of the panel that starts at output channel `ob` of `co`: 32, or 16 for a last one
+/// of at most 16 channels (the kernel's blocks of two and one vectors).
+fn panel_width(co: usize, ob: usize) -> usize {
+    if co - ob > 16 {
+        PANEL
+    } else {
+        16
+    }
+}
+
+/// The weights `w` (`red × C_out`, output channels contiguous) in the order [`conv_rows`]
+/// streams them: panels of [`PANEL`] output channels (16 for a last one of at most 16), each
+/// `red × width` contiguous and zero-padded past `C_out`, so that a register block reads its
+/// weights as one sequential run.
+pub(super) fn pack(w: &[f32], red: usize, co: usize) -> Vec<f32> {
+    assert_eq!(w.len(), red * co, "pack sizes");
+    let mut out = Vec::with_capacity(packed_len(red, co));
+    let mut ob = 0;
+    while ob < co {
+        let width = panel_width(co, ob);
+        let n = width.min(co - ob);
+        for r in 0..red {
+            out.extend_from_slice(&w[r * co + ob..r * co + ob + n]);
+            out.extend(std::iter::repeat_n(0.0, width - n));
+        }
+        ob += width;
+    }
+    out
+}
+
+/// The length of [`pack`]'s output.
+fn packed_len(red: usize, co: usize) -> usize {
+    let tail = match co % PANEL {
+        0 => 0,
+        1..=16 => 16,
+        _ => PANEL,
+    };
+    red * (co / PANEL * PANEL + tail)
+}
+
 /// `y[y0 + p·C_out + o] = b[o] + Σ_r a[p, r] · w[r·C_out + o]` (then `max(·, 0)` if `relu`)
-/// for the `n` pixels `p` whose rows `a[p, ·]` [`InPlace`] describes; `C_out = b.len()`.
+/// for the `n` pixels `p` whose rows `a[p, ·]` [`InPlace`] describes; `C_out = b.len()`, the
+/// weights `w` as [`pack`] lays them out.
 ///
 /// # Panics
 /// If a read or write would leave `x`, `w`, `b` or `y`.
@@ -69,15 +113,18 @@ pub(super) fn conv_rows(
     if n == 0 || co == 0 {
         return;
     }
-    assert!(red > 0 && w.len() >= red * co, "conv_rows weights");
+    assert!(
+        red > 0 && w.len() == packed_len(red, co),
+        "conv_rows weights"
+    );
     assert!(
         at.base + (n - 1) * at.step + (at.k_h - 1) * at.row + at.run <= x.len(),
         "conv_rows input"
     );
     assert!(y0 + n * co <= y.len(), "conv_rows output");
-    // The asserts bound every index below: pixel rows below n, runs inside x, weight rows below
-    // red, output channels below co (the masks keep the loads and stores of a partial block of
-    // channels inside it).
+    // The asserts bound every index below: pixel rows below n, runs inside x, weight panels
+    // inside w, output channels below co (the masks keep the loads and stores of a partial
+    // block of channels inside it).
     let (xp, wp, yp) = (x.as_ptr(), w.as_ptr(), y.as_mut_ptr());
     let mut p0 = 0;
     while p0 < n {
@@ -117,23 +164,30 @@ unsafe fn pixels<const R: usize>(
     y0: usize,
 ) {
     let co = b.len();
+    let red = at.k_h * at.run;
     let mut ob = 0;
-    while ob + 16 < co {
-        let m = [0xffff, lanes(co - ob - 16)];
-        // SAFETY: as the caller's; channels ob .. ob + 32 masked to below co.
-        unsafe { block::<R, 2>(xp, at, p0, wp, b, ob, m, relu, yp, y0) };
-        ob += 32;
-    }
-    if ob < co {
-        // SAFETY: as above, channels ob .. ob + 16 masked to below co.
-        unsafe { block::<R, 1>(xp, at, p0, wp, b, ob, [lanes(co - ob)], relu, yp, y0) };
+    while ob < co {
+        // Panel `ob / PANEL` starts after the full panels before it.
+        let panel = wp.wrapping_add(ob * red);
+        // SAFETY: as the caller's; channels ob .. ob + 16·NV masked to below co, the panel's
+        // red × 16·NV weights inside w (conv_rows checked its packed length).
+        unsafe {
+            if panel_width(co, ob) == PANEL {
+                let m = [0xffff, lanes(co - ob - 16)];
+                block::<R, 2>(xp, at, p0, panel, b, ob, m, relu, yp, y0);
+            } else {
+                block::<R, 1>(xp, at, p0, panel, b, ob, [lanes(co - ob)], relu, yp, y0);
+            }
+        }
+        ob += PANEL;
     }
 }
 
-/// The `R × 16·NV` register block: pixels `p0 .. p0 + R`, channels `ob ..` under `masks`.
+/// The `R × 16·NV` register block: pixels `p0 .. p0 + R`, channels `ob ..` under `masks`,
+/// their weights the panel at `panel` (`red × 16·NV`).
 ///
 /// # Safety
-/// As [`pixels`]; the masks' lanes lie below `C_out`.
+/// As [`pixels`]; the masks' lanes lie below `C_out`; the panel lies inside the weights.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 #[target_feature(enable = "avx512f")]
@@ -141,7 +195,7 @@ unsafe fn block<const R: usize, const NV: usize>(
     xp: *const f32,
     at: &InPlace,
     p0: usize,
-    wp: *const f32,
+    panel: *const f32,
     b: &[f32],
     ob: usize,
     masks: [__mmask16; NV],
@@ -150,22 +204,21 @@ unsafe fn block<const R: usize, const NV: usize>(
     y0: usize,
 ) {
     let co = b.len();
-    // Every load and store below stays within the bounds the caller guarantees: bias and
-    // weight rows at channels the masks keep below C_out, weight rows below the reduction
+    // Every load and store below stays within the bounds the caller guarantees: the bias and
+    // outputs at channels the masks keep below C_out, the panel's rows below the reduction
     // length, input runs of pixels p0 .. p0 + R.
     // SAFETY: as above.
     let bias: [__m512; NV] = std::array::from_fn(|v| unsafe {
         _mm512_maskz_loadu_ps(masks[v], b.as_ptr().add(ob + 16 * v))
     });
     let mut acc = [bias; R];
-    let mut wr_row = wp.wrapping_add(ob);
+    let mut wr_row = panel;
     for ky in 0..at.k_h {
         let a = xp.wrapping_add(at.base + p0 * at.step + ky * at.row);
         for t in 0..at.run {
-            // SAFETY: as above.
-            let wr: [__m512; NV] = std::array::from_fn(|v| unsafe {
-                _mm512_maskz_loadu_ps(masks[v], wr_row.add(16 * v))
-            });
+            // SAFETY: as above (the panel is zero-padded to whole vectors).
+            let wr: [__m512; NV] =
+                std::array::from_fn(|v| unsafe { _mm512_loadu_ps(wr_row.add(16 * v)) });
             for (p, row) in acc.iter_mut().enumerate() {
                 // SAFETY: as above.
                 let av = _mm512_set1_ps(unsafe { *a.add(p * at.step + t) });
@@ -173,7 +226,7 @@ unsafe fn block<const R: usize, const NV: usize>(
                     row[v] = _mm512_fmadd_ps(av, wr[v], row[v]);
                 }
             }
-            wr_row = wr_row.wrapping_add(co);
+            wr_row = wr_row.wrapping_add(16 * NV);
         }
     }
     if relu {
@@ -242,6 +295,12 @@ pub(super) fn depthwise_row3(x: &[f32], w: &[f32], b: &[f32], at: &Row3, y: &mut
         let mut p = 0;
         // SAFETY: columns p .. p + N below at.n, channels masked below c.
         unsafe {
+            if at.step == c {
+                while p + COLS <= at.n {
+                    columns_stride1(xp, &wk, bias, m, at, c, cb, p, yp);
+                    p += COLS;
+                }
+            }
             while p + COLS <= at.n {
                 columns::<COLS>(xp, &wk, bias, m, at, c, cb, p, yp);
                 p += COLS;
@@ -252,6 +311,46 @@ pub(super) fn depthwise_row3(x: &[f32], w: &[f32], b: &[f32], at: &Row3, y: &mut
             }
         }
         cb += 16;
+    }
+}
+
+/// [`columns`] for `COLS` columns at stride 1, where neighbouring columns share taps: each
+/// input row's `COLS + 2` pixels are loaded once and serve all three kernel columns (30 loads
+/// for 72 multiply-adds, not 72); the multiply-adds keep their order.
+///
+/// # Safety
+/// As [`columns`] with `N = COLS`, and `at.step == c`.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+#[target_feature(enable = "avx512f")]
+unsafe fn columns_stride1(
+    xp: *const f32,
+    wk: &[__m512; 9],
+    bias: __m512,
+    m: __mmask16,
+    at: &Row3,
+    c: usize,
+    cb: usize,
+    p: usize,
+    yp: *mut f32,
+) {
+    let xb = at.x0 + p * c + cb;
+    let mut acc = [bias; COLS];
+    for ky in 0..3 {
+        let xi = xb + ky * at.row;
+        // Pixels p .. p + COLS + 2 of the row: column q's tap kx is pixel q + kx.
+        // SAFETY: as the caller's (the last is tap (ky, 2) of column p + COLS − 1).
+        let v: [__m512; COLS + 2] =
+            std::array::from_fn(|i| unsafe { _mm512_maskz_loadu_ps(m, xp.add(xi + i * c)) });
+        for kx in 0..3 {
+            for (q, a) in acc.iter_mut().enumerate() {
+                *a = _mm512_fmadd_ps(v[q + kx], wk[ky * 3 + kx], *a);
+            }
+        }
+    }
+    for (q, a) in acc.iter().enumerate() {
+        // SAFETY: as the caller's.
+        unsafe { _mm512_mask_storeu_ps(yp.add(at.y0 + (p + q) * c + cb), m, *a) };
     }
 }
 
@@ -333,10 +432,11 @@ mod tests {
             let x = pseudo(2 + (n - 1) * step + (k_h - 1) * row + run, 1);
             let w = pseudo(red * co, 2);
             let b = pseudo(co, 3);
+            let packed = pack(&w, red, co);
             let mut y = vec![7.0; 5 + n * co];
             for relu in [false, true] {
                 // SAFETY: the CPU has AVX-512F (tested above).
-                unsafe { conv_rows(&x, &at, n, &w, &b, relu, &mut y, 5) };
+                unsafe { conv_rows(&x, &at, n, &packed, &b, relu, &mut y, 5) };
                 for p in 0..n {
                     for o in 0..co {
                         let mut acc = b[o];

@@ -2,13 +2,16 @@ use super::depthwise_conv2d::valid_taps;
 use super::{Activation, Madd, Window};
 
 /// Convolution weights re-laid out for the NHWC kernel: `w[(ky·k_w + kx)·C_in + ci][co]`
-/// (the reduction index outer, output channels contiguous), plus the bias `[C_out]`.
+/// (the reduction index outer, output channels contiguous), plus the bias `[C_out]`; on x86-64
+/// CPUs with AVX-512 also in the panels its kernel streams.
 #[derive(Clone, Debug)]
 pub struct Conv2dWeights {
     pub c_in: usize,
     pub c_out: usize,
     pub w: Vec<f32>,
     pub bias: Vec<f32>,
+    /// `w` in panels of output channels for the AVX-512 kernel (empty where it does not run).
+    panels: Vec<f32>,
 }
 
 impl Conv2dWeights {
@@ -28,11 +31,20 @@ impl Conv2dWeights {
                 w[r * c_out + o] = ohwi[o * red + r];
             }
         }
+        #[cfg(target_arch = "x86_64")]
+        let panels = if super::avx512::available() {
+            super::avx512::pack(&w, red, c_out)
+        } else {
+            Vec::new()
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let panels = Vec::new();
         Conv2dWeights {
             c_in,
             c_out,
             w,
             bias,
+            panels,
         }
     }
 }
@@ -82,7 +94,7 @@ pub fn conv2d<M: Madd>(
             // SAFETY: the CPU has AVX-512F (tested above).
             #[allow(unsafe_code)]
             unsafe {
-                super::avx512::conv_rows(x, &at, x.len() / ci, &wts.w, &wts.bias, relu, y, 0)
+                super::avx512::conv_rows(x, &at, x.len() / ci, &wts.panels, &wts.bias, relu, y, 0)
             };
             return;
         }
@@ -169,7 +181,7 @@ pub fn conv2d<M: Madd>(
             // SAFETY: the CPU has AVX-512F (tested above).
             #[allow(unsafe_code)]
             unsafe {
-                super::avx512::conv_rows(x, &at, hi - lo, &wts.w, &wts.bias, relu, y, y0)
+                super::avx512::conv_rows(x, &at, hi - lo, &wts.panels, &wts.bias, relu, y, y0)
             };
             continue;
         }
