@@ -724,14 +724,24 @@ impl Network {
                     ))
                 }
                 Step::Prelu { x, y, alpha } => {
-                    with_out!(*y, |out| ops::prelu(get!(*x), alpha, out))
+                    with_out!(*y, |out| ops::separately::prelu(get!(*x), alpha, out))
                 }
                 Step::Relu { x, y } => with_out!(*y, |out| ops::relu(get!(*x), out)),
                 Step::Add { a, b, y, act } => {
-                    with_out!(*y, |out| ops::add(get!(*a), get!(*b), *act, out))
+                    with_out!(*y, |out| ops::separately::add(
+                        get!(*a),
+                        get!(*b),
+                        *act,
+                        out
+                    ))
                 }
                 Step::AddPrelu { a, b, y, alpha } => {
-                    with_out!(*y, |out| ops::add_prelu(get!(*a), get!(*b), alpha, out))
+                    with_out!(*y, |out| ops::separately::add_prelu(
+                        get!(*a),
+                        get!(*b),
+                        alpha,
+                        out
+                    ))
                 }
                 Step::Resize {
                     x,
@@ -764,7 +774,12 @@ impl Network {
                     out
                 )),
                 Step::MaxPool { x, y, win, c } => {
-                    with_out!(*y, |out| ops::max_pool2d(get!(*x), win, *c, out))
+                    with_out!(*y, |out| ops::separately::max_pool2d(
+                        get!(*x),
+                        win,
+                        *c,
+                        out
+                    ))
                 }
                 Step::Pad { x, y, shape, pads } => {
                     with_out!(*y, |out| ops::pad4(get!(*x), *shape, *pads, out))

@@ -14,6 +14,7 @@ mod madd;
 mod max_pool2d;
 mod pad;
 mod resize_bilinear;
+pub mod separately;
 mod window;
 
 pub use conv2d::{conv2d, Conv2dWeights};
