@@ -4,7 +4,8 @@
 //!
 //! Each compiled step is timed alone (median of RUNS runs, default 200, one thread) and printed
 //! with its multiply-adds, the bytes it must move, its rate, and the time the roofline allows:
-//! `max(MACs / peak, bytes / bandwidth)`, with the peak (AVX2 FMA, registers only) and the
+//! `max(MACs / peak, bytes / bandwidth)`, with the peak (FMA at the widest vectors the kernels
+//! use here, AVX-512 or AVX2, registers only) and the
 //! bandwidth (a copy within the L2 cache) measured here first. The last lines sum the steps per
 //! kind of kernel.
 
@@ -16,29 +17,52 @@ use visage_nn::Network;
 /// Independent accumulators: enough to cover the FMA latency on two pipes.
 const CHAINS: usize = 12;
 
-/// Multiply-adds per second with every value in registers.
-fn peak_macs_per_s() -> f64 {
+/// Multiply-adds per second with every value in registers, and the instruction set.
+fn peak_macs_per_s() -> (f64, &'static str) {
     let reps = 20_000_000usize;
     let start = Instant::now();
-    let v = fma_loop(reps);
+    let (v, lanes, isa) = fma_loop(reps);
     let s = start.elapsed().as_secs_f64();
     std::hint::black_box(v);
-    (reps * CHAINS * 8) as f64 / s
+    ((reps * CHAINS * lanes) as f64 / s, isa)
 }
 
-fn fma_loop(reps: usize) -> f32 {
+fn fma_loop(reps: usize) -> (f32, usize, &'static str) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the CPU has AVX-512F (checked just above).
+        return (unsafe { fma_loop_avx512(reps) }, 16, "AVX-512 FMA");
+    }
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the CPU has AVX2 and FMA (checked just above).
-        return unsafe { fma_loop_avx2(reps) };
+        return (unsafe { fma_loop_avx2(reps) }, 8, "AVX2 FMA");
     }
-    fma_chains(reps)
+    (fma_chains(reps), 8, "scalar")
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn fma_loop_avx2(reps: usize) -> f32 {
     fma_chains(reps)
+}
+
+/// With explicit 512-bit vectors: the compiler keeps arrays of 16 lanes out of registers.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn fma_loop_avx512(reps: usize) -> f32 {
+    use std::arch::x86_64::{_mm512_fmadd_ps, _mm512_reduce_add_ps, _mm512_set1_ps};
+    let mut acc = [_mm512_set1_ps(1.0); CHAINS];
+    let (a, b) = (
+        _mm512_set1_ps(std::hint::black_box(0.999_f32)),
+        _mm512_set1_ps(std::hint::black_box(1e-4_f32)),
+    );
+    for _ in 0..reps {
+        for v in acc.iter_mut() {
+            *v = _mm512_fmadd_ps(*v, a, b);
+        }
+    }
+    acc.iter().map(|&v| _mm512_reduce_add_ps(v)).sum()
 }
 
 #[inline(always)]
@@ -84,10 +108,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (i, v) in net.input_mut().iter_mut().enumerate() {
         *v = ((i * 7919) % 256) as f32 / 255.0;
     }
-    let peak = peak_macs_per_s();
+    let (peak, isa) = peak_macs_per_s();
     let bandwidth = l2_bytes_per_s(256 << 10);
     println!(
-        "{path}: peak {:.1} GMAC/s (AVX2 FMA, registers), L2 copy {:.1} GB/s; {runs} runs",
+        "{path}: peak {:.1} GMAC/s ({isa}, registers), L2 copy {:.1} GB/s; {runs} runs",
         peak / 1e9,
         bandwidth / 1e9
     );
