@@ -4,7 +4,8 @@
 //! - [`conv_rows`]: a GEMM register block of 12 pixels × 32 output channels (24 accumulators)
 //!   whose left-hand rows are read in place from the input, so one kernel serves the 1×1
 //!   convolutions and the interior windows of the k×k ones;
-//! - [`depthwise_row3`]: the depthwise 3×3 row sweep, 16 channels and 8 output columns at a time.
+//! - [`depthwise_row3`]: the depthwise 3×3 row sweep, 16 channels and 8 output columns at a
+//!   time, and [`depthwise_pixel`] for the pixels whose window the input clips.
 //!
 //! Each keeps the generic kernels' order of multiply-adds per output value (the bias, then the
 //! taps in the weights' order), so the outputs are the same values bit for bit as the AVX2 and
@@ -354,6 +355,67 @@ unsafe fn columns_stride1(
     }
 }
 
+/// The taps of one depthwise output pixel whose window the input clips: rows `ky.0 .. ky.1`
+/// and columns `kx.0 .. kx.1` of a kernel `k_w` wide; tap `(ky.0, kx.0)` at `x0`, input rows
+/// `row` values apart; the output at `y0`.
+pub(super) struct Taps {
+    pub x0: usize,
+    pub row: usize,
+    pub ky: (usize, usize),
+    pub kx: (usize, usize),
+    pub k_w: usize,
+    pub y0: usize,
+}
+
+/// Every channel of one depthwise output pixel, any window: `y = b + Σ w[ky, kx] · x[tap]` over
+/// the valid taps, row by row (the generic kernel's order).
+///
+/// # Panics
+/// If a read or write would leave `x`, `w`, `b` or `y`.
+#[target_feature(enable = "avx512f")]
+pub(super) fn depthwise_pixel(x: &[f32], w: &[f32], b: &[f32], at: &Taps, y: &mut [f32]) {
+    let c = b.len();
+    let ((ky0, ky1), (kx0, kx1)) = (at.ky, at.kx);
+    assert!(at.y0 + c <= y.len(), "depthwise_pixel output");
+    if ky1 > ky0 && kx1 > kx0 {
+        assert!(kx1 <= at.k_w, "depthwise_pixel window");
+        assert!(
+            at.x0 + (ky1 - ky0 - 1) * at.row + (kx1 - kx0) * c <= x.len(),
+            "depthwise_pixel input"
+        );
+        assert!(
+            (ky1 - 1) * at.k_w * c + kx1 * c <= w.len(),
+            "depthwise_pixel weights"
+        );
+    }
+    let (xp, wp, yp) = (x.as_ptr(), w.as_ptr(), y.as_mut_ptr());
+    let mut cb = 0;
+    while cb < c {
+        let m = lanes(c - cb);
+        // The asserts bound every index: the last valid tap's channels, its weights and the
+        // output, at channels the mask keeps below c.
+        // SAFETY: as above.
+        let mut acc = unsafe { _mm512_maskz_loadu_ps(m, b.as_ptr().add(cb)) };
+        for ky in ky0..ky1 {
+            for kx in kx0..kx1 {
+                let xi = at.x0 + (ky - ky0) * at.row + (kx - kx0) * c + cb;
+                let wi = (ky * at.k_w + kx) * c + cb;
+                // SAFETY: as above.
+                let (xv, wv) = unsafe {
+                    (
+                        _mm512_maskz_loadu_ps(m, xp.add(xi)),
+                        _mm512_maskz_loadu_ps(m, wp.add(wi)),
+                    )
+                };
+                acc = _mm512_fmadd_ps(xv, wv, acc);
+            }
+        }
+        // SAFETY: as above.
+        unsafe { _mm512_mask_storeu_ps(yp.add(at.y0 + cb), m, acc) };
+        cb += 16;
+    }
+}
+
 /// Channels `cb ..` (mask `m`) of output columns `p .. p + N` of [`depthwise_row3`]: N
 /// independent chains of nine multiply-adds.
 ///
@@ -480,6 +542,32 @@ mod tests {
                     assert_eq!(y[1 + p * c + ch].to_bits(), acc.to_bits());
                 }
             }
+        }
+        // A clipped 5×5 window: rows 1..5 and columns 0..3 of the kernel.
+        let (c, k_w, row) = (21, 5, 40 * 21);
+        let at = Taps {
+            x0: 4,
+            row,
+            ky: (1, 5),
+            kx: (0, 3),
+            k_w,
+            y0: 2,
+        };
+        let x = pseudo(4 + 3 * row + 3 * c, 7);
+        let w = pseudo(25 * c, 8);
+        let b = pseudo(c, 9);
+        let mut y = vec![0.0; 2 + c];
+        // SAFETY: the CPU has AVX-512F (tested above).
+        unsafe { depthwise_pixel(&x, &w, &b, &at, &mut y) };
+        for ch in 0..c {
+            let mut acc = b[ch];
+            for ky in 1..5 {
+                for kx in 0..3 {
+                    let xv = x[4 + (ky - 1) * row + kx * c + ch];
+                    acc = xv.mul_add(w[(ky * k_w + kx) * c + ch], acc);
+                }
+            }
+            assert_eq!(y[2 + ch].to_bits(), acc.to_bits());
         }
     }
 }

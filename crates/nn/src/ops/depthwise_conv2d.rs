@@ -47,6 +47,26 @@ pub fn depthwise_conv2d<M: Madd>(
         let full_rows = win.k_h == 3 && ky0 == 0 && ky1 == 3;
         let (lo, hi) = if full_rows { (ox_lo, ox_hi) } else { (0, 0) };
         for ox in (0..lo).chain(hi.max(lo)..win.out_w) {
+            #[cfg(target_arch = "x86_64")]
+            if avx512 {
+                let (kx0, kx1) = valid_taps(ox, win.stride_w, win.pad_left, win.k_w, win.in_w);
+                let iy = oy * win.stride_h + ky0 - win.pad_top;
+                let ix = ox * win.stride_w + kx0 - win.pad_left;
+                let at = super::avx512::Taps {
+                    x0: (iy * win.in_w + ix) * c,
+                    row: win.in_w * c,
+                    ky: (ky0, ky1),
+                    kx: (kx0, kx1),
+                    k_w: win.k_w,
+                    y0: (oy * win.out_w + ox) * c,
+                };
+                // SAFETY: `avx512` is set only where the CPU has AVX-512F.
+                #[allow(unsafe_code)]
+                unsafe {
+                    super::avx512::depthwise_pixel(x, w, b, &at, y)
+                };
+                continue;
+            }
             pixel::<M>(x, win, c, w, b, oy, ox, (ky0, ky1), y);
         }
         if hi > lo {
