@@ -5,7 +5,7 @@
 //! Every decoded frame carries its presentation time ([`Frame::timestamp_s`]), in seconds since
 //! the first frame. Before decoding, `ffprobe` lists the video packets' presentation timestamps
 //! (`-show_entries packet=pts,flags`: the container's index, no decoding, about 0.1 s for a
-//! minute of video); discarded packets (flag `D`, e.g. before an MP4 edit list's start) are
+//! minute of video; in the same run as the stream's size and rate and FFmpeg's release); discarded packets (flag `D`, e.g. before an MP4 edit list's start) are
 //! dropped and the rest sorted into presentation order. `ffmpeg` runs with `-fps_mode
 //! passthrough` (`-vsync passthrough` before FFmpeg 5.1), so it hands over every decoded frame
 //! exactly once, in presentation order — without it the
@@ -96,16 +96,20 @@ fn probe_stream(path: &Path) -> Result<(VideoInfo, Option<TimeBase>), VideoError
     }
     let v: serde_json::Value = serde_json::from_slice(&out.stdout)
         .map_err(|e| not_video(format!("unexpected ffprobe output: {e}")))?;
-    let s = v["streams"]
-        .get(0)
-        .ok_or_else(|| not_video("no video stream".into()))?;
+    stream_info(&v).map_err(not_video)
+}
+
+/// The size, rates, rotation, frame count and time base of `ffprobe`'s first listed stream
+/// (its JSON output), or why there is none.
+fn stream_info(v: &serde_json::Value) -> Result<(VideoInfo, Option<TimeBase>), String> {
+    let s = v["streams"].get(0).ok_or("no video stream")?;
     let dim = |k: &str| {
         s[k].as_u64()
             .filter(|&d| d > 0 && d <= u32::MAX as u64)
             .map(|d| d as u32)
     };
     let (Some(w), Some(h)) = (dim("width"), dim("height")) else {
-        return Err(not_video("video stream without a size".into()));
+        return Err("video stream without a size".into());
     };
     let rate = |k: &str| ratio(&s[k]).map(|(a, b)| a as f64 / b as f64);
     let fps = rate("r_frame_rate");
@@ -129,6 +133,69 @@ fn probe_stream(path: &Path) -> Result<(VideoInfo, Option<TimeBase>), VideoError
     Ok((info, time_base))
 }
 
+/// What [`probe_for_decoding`] found.
+struct Probed {
+    info: VideoInfo,
+    /// The frames' timestamps, seconds since the first.
+    timestamps: Option<Vec<f64>>,
+    /// FFmpeg's `(major, minor)` release.
+    release: Option<(u32, u32)>,
+}
+
+/// What decoding needs, from one `ffprobe` run (each run of an FFmpeg tool costs ~50 ms of
+/// CPU starting up): the stream ([`probe`]), its frames' timestamps (see the module's docs)
+/// and FFmpeg's release (for [`passthrough_option`]; `ffprobe` and `ffmpeg` come from one
+/// build). Where that run fails or lists something unexpected, the stream probe and the packet
+/// list run separately as before, so a damaged file fails or degrades as it always did.
+fn probe_for_decoding(path: &Path) -> Result<Probed, VideoError> {
+    let show = [
+        "-show_entries",
+        "stream:packet=pts,flags",
+        "-show_program_version",
+        "-of",
+        "json",
+    ];
+    let combined = ffprobe_first_video(path, &show)
+        .ok()
+        .filter(|out| out.status.success())
+        .and_then(|out| serde_json::from_slice::<serde_json::Value>(&out.stdout).ok())
+        .and_then(|v| {
+            let (info, time_base) = stream_info(&v).ok()?;
+            let packets = v["packets"].as_array()?;
+            let release = v["program_version"]["version"]
+                .as_str()
+                .and_then(|version| release(&format!("ffprobe version {version}")));
+            Some(Probed {
+                info,
+                timestamps: time_base.and_then(|tb| packet_times(packets, tb)),
+                release,
+            })
+        });
+    match combined {
+        Some(found) => Ok(found),
+        None => {
+            let (info, time_base) = probe_stream(path)?;
+            Ok(Probed {
+                info,
+                timestamps: time_base.and_then(|tb| packet_timestamps(path, tb)),
+                release: None,
+            })
+        }
+    }
+}
+
+/// [`packet_timestamps`] from the JSON packet list of [`probe_for_decoding`]'s run.
+fn packet_times(packets: &[serde_json::Value], time_base: TimeBase) -> Option<Vec<f64>> {
+    let mut pts = Vec::with_capacity(packets.len());
+    for p in packets {
+        if p["flags"].as_str().is_some_and(|f| f.contains('D')) {
+            continue;
+        }
+        pts.push(p["pts"].as_i64()?);
+    }
+    seconds_since_first(pts, time_base)
+}
+
 /// The presentation timestamps of the first video stream's packets, in seconds since the
 /// earliest, sorted: the frames' times in the order a passthrough `ffmpeg` delivers them. `None`
 /// when `ffprobe` lists no packets or a kept packet has no timestamp. A file cut short lists
@@ -139,7 +206,13 @@ fn packet_timestamps(path: &Path, time_base: TimeBase) -> Option<Vec<f64>> {
         &["-show_entries", "packet=pts,flags", "-of", "csv=p=0"],
     )
     .ok()?;
-    let mut pts = parse_packet_list(&String::from_utf8_lossy(&out.stdout))?;
+    let pts = parse_packet_list(&String::from_utf8_lossy(&out.stdout))?;
+    seconds_since_first(pts, time_base)
+}
+
+/// Timestamps `pts` (in `time_base` ticks) sorted, in seconds since the earliest; `None` for
+/// none.
+fn seconds_since_first(mut pts: Vec<i64>, time_base: TimeBase) -> Option<Vec<f64>> {
     pts.sort_unstable();
     let first = *pts.first()?;
     let tick = time_base.num as f64 / time_base.den as f64;
@@ -179,13 +252,16 @@ pub struct VideoReader {
 impl VideoReader {
     /// Probes `path`, lists its frames' timestamps and starts decoding it.
     pub fn open(path: &Path) -> Result<VideoReader, VideoError> {
-        let (info, time_base) = probe_stream(path)?;
-        let timestamps = time_base.and_then(|tb| packet_timestamps(path, tb));
+        let Probed {
+            info,
+            timestamps,
+            release,
+        } = probe_for_decoding(path)?;
         // Every decoded frame once, with its own time (see the module's docs).
         let mut child = Command::new("ffmpeg")
             .args(["-v", "error", "-nostdin", "-i"])
             .arg(path)
-            .args(["-map", "0:v:0", passthrough_option(), "passthrough"])
+            .args(["-map", "0:v:0", passthrough_option(release), "passthrough"])
             .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
@@ -325,22 +401,26 @@ pub(crate) fn collect_stderr(child: &mut Child) -> Option<JoinHandle<String>> {
 
 /// The option that makes `ffmpeg` pass every frame through once: `-fps_mode` (FFmpeg 5.1 and
 /// later; FFmpeg 9 dropped the older name), or `-vsync` before 5.1, which has no `-fps_mode`.
-/// Asks `ffmpeg -version` once per process.
-fn passthrough_option() -> &'static str {
-    static OPTION: std::sync::OnceLock<&'static str> = std::sync::OnceLock::new();
-    OPTION.get_or_init(|| {
-        let version = Command::new("ffmpeg")
-            .arg("-version")
-            .stdin(Stdio::null())
-            .stderr(Stdio::null())
-            .output()
-            .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
-            .unwrap_or_default();
-        match release(&version) {
-            Some(v) if v < (5, 1) => "-vsync",
-            _ => "-fps_mode",
-        }
-    })
+/// From `release` where the probe found it, else from `ffmpeg -version`, asked once per
+/// process.
+fn passthrough_option(release_found: Option<(u32, u32)>) -> &'static str {
+    static ASKED: std::sync::OnceLock<Option<(u32, u32)>> = std::sync::OnceLock::new();
+    let release_found = release_found.or_else(|| {
+        *ASKED.get_or_init(|| {
+            let version = Command::new("ffmpeg")
+                .arg("-version")
+                .stdin(Stdio::null())
+                .stderr(Stdio::null())
+                .output()
+                .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
+                .unwrap_or_default();
+            release(&version)
+        })
+    });
+    match release_found {
+        Some(v) if v < (5, 1) => "-vsync",
+        _ => "-fps_mode",
+    }
 }
 
 /// `(major, minor)` from `ffmpeg -version`'s first line (`ffmpeg version 5.1.9-0+deb12u1 …`,
@@ -371,7 +451,7 @@ pub fn ffmpeg_available() -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::{parse_packet_list, release};
+    use super::{packet_times, parse_packet_list, passthrough_option, release, TimeBase};
 
     #[test]
     fn ffmpeg_releases_are_read_from_the_version_line() {
@@ -392,5 +472,29 @@ mod tests {
         assert_eq!(parse_packet_list(text), Some(vec![0, 2048, 1024]));
         assert_eq!(parse_packet_list("0,K_\nN/A,__\n"), None);
         assert_eq!(parse_packet_list(""), Some(vec![]));
+    }
+
+    #[test]
+    fn json_packet_list_gives_the_same_times() {
+        let tb = TimeBase { num: 1, den: 1024 };
+        let packets: serde_json::Value = serde_json::json!([
+            {"pts": -1024, "flags": "_D"},
+            {"pts": 0, "flags": "K_"},
+            {"pts": 2048, "flags": "__"},
+            {"pts": 1024, "flags": "__"},
+        ]);
+        let packets = packets.as_array().unwrap();
+        assert_eq!(packet_times(packets, tb), Some(vec![0.0, 1.0, 2.0]));
+        // A kept packet without a timestamp: no list (the frame rate stands in).
+        let missing = serde_json::json!([{"pts": 0, "flags": "K_"}, {"flags": "__"}]);
+        assert_eq!(packet_times(missing.as_array().unwrap(), tb), None);
+        assert_eq!(packet_times(&[], tb), None);
+    }
+
+    #[test]
+    fn the_probed_release_chooses_the_passthrough_option() {
+        assert_eq!(passthrough_option(Some((4, 4))), "-vsync");
+        assert_eq!(passthrough_option(Some((5, 1))), "-fps_mode");
+        assert_eq!(passthrough_option(Some((7, 0))), "-fps_mode");
     }
 }
