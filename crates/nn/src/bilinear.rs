@@ -43,13 +43,18 @@ pub fn sample_rgb_lanes(
     out: &mut [f32; 24],
 ) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && avx2::fits(src, w, h, fx, fy) {
+    if std::arch::is_x86_feature_detected!("avx2")
+        && w > 0
+        && h > 0
+        && src.len() == w * h * 3
+        && src.len() < i32::MAX as usize
+        && w.max(h) < 1 << 24
+    {
         // SAFETY: the CPU has AVX2 (tested just above).
         #[allow(unsafe_code)]
-        unsafe {
-            avx2::sample8(src, w, fx, fy, out)
-        };
-        return;
+        if unsafe { avx2::sample8(src, w, fx, fy, out) } {
+            return;
+        }
     }
     for (k, o) in out.chunks_exact_mut(3).enumerate() {
         sample_rgb(src, w, h, fx[k], fy[k], o);
@@ -69,31 +74,41 @@ mod avx2 {
         _mm256_storeu_ps, _mm256_sub_ps,
     };
 
-    /// Whether [`sample8`] may read these points: every coordinate inside `[0, w − 1]` ×
-    /// `[0, h − 1]` (so not NaN), every byte offset an `i32`, and four bytes readable at each
-    /// neighbour (the last pixel of the image has only three: such points go the scalar way).
-    pub(super) fn fits(src: &[u8], w: usize, h: usize, fx: &[f32; 8], fy: &[f32; 8]) -> bool {
-        let (max_x, max_y) = ((w.max(1) - 1) as f32, (h.max(1) - 1) as f32);
-        let inside = fx.iter().all(|&x| (0.0..=max_x).contains(&x))
-            && fy.iter().all(|&y| (0.0..=max_y).contains(&y));
-        // The farthest byte read is the fourth of neighbour (x1, y1): inside `src` unless that
-        // neighbour is the image's last pixel (x1 = w − 1 and y1 = h − 1).
-        let tail_ok = fx
-            .iter()
-            .zip(fy)
-            .all(|(&x, &y)| (x as usize) + 2 < w || (y as usize) + 2 < h);
-        w > 0
-            && h > 0
-            && src.len() == w * h * 3
-            && src.len() < i32::MAX as usize
-            && inside
-            && tail_ok
+    /// Whether [`sample8`] may read these points of a `w × h` image: every coordinate inside
+    /// `[0, w − 1]` × `[0, h − 1]` (so not NaN), and four bytes readable at each neighbour (the
+    /// last pixel of the image has only three: such points go the scalar way). Branch-free, so
+    /// that it compiles to vector compares.
+    #[inline(always)]
+    fn fits(w: usize, h: usize, fx: &[f32; 8], fy: &[f32; 8]) -> bool {
+        let (max_x, max_y) = ((w - 1) as f32, (h - 1) as f32);
+        // x1 = w − 1 exactly where ⌊x⌋ ≥ w − 2, i.e. x ≥ w − 2 (exact below 2²⁴ pixels).
+        let (last_x, last_y) = (w as f32 - 2.0, h as f32 - 2.0);
+        let mut ok = true;
+        for (&x, &y) in fx.iter().zip(fy) {
+            let inside = (x >= 0.0) & (x <= max_x) & (y >= 0.0) & (y <= max_y);
+            // The farthest byte read is the fourth of neighbour (x1, y1): inside the image
+            // unless that neighbour is its last pixel (x1 = w − 1 and y1 = h − 1).
+            let tail = (x < last_x) | (y < last_y);
+            ok &= inside & tail;
+        }
+        ok
     }
 
-    /// The eight samples; the caller has checked [`fits`].
+    /// The eight samples into `out` where the points [`fits`] the image `src` (`w` pixels wide,
+    /// `w > 0`, three bytes a pixel, fewer than `i32::MAX` bytes, sides below 2²⁴: the caller
+    /// checks); `false`, with `out` untouched, where they do not.
     #[target_feature(enable = "avx2")]
-    pub(super) fn sample8(src: &[u8], w: usize, fx: &[f32; 8], fy: &[f32; 8], out: &mut [f32; 24]) {
+    pub(super) fn sample8(
+        src: &[u8],
+        w: usize,
+        fx: &[f32; 8],
+        fy: &[f32; 8],
+        out: &mut [f32; 24],
+    ) -> bool {
         let h = src.len() / 3 / w;
+        if h == 0 || !fits(w, h, fx, fy) {
+            return false;
+        }
         // SAFETY: fx and fy hold eight values each.
         let (vx, vy) = unsafe { (_mm256_loadu_ps(fx.as_ptr()), _mm256_loadu_ps(fy.as_ptr())) };
         // Coordinates in [0, max] (checked): truncation is `as usize`.
@@ -109,7 +124,7 @@ mod avx2 {
         };
         let base = src.as_ptr() as *const i32;
         // SAFETY: every offset is a pixel of the image with a fourth byte after it inside
-        // `src` (`fits`), and below i32::MAX.
+        // `src` (`fits`), and below i32::MAX (the caller's check).
         let gather = |off: __m256i| unsafe { _mm256_i32gather_epi32::<1>(base, off) };
         let (g00, g10) = (gather(offset(x0, y0)), gather(offset(x1, y0)));
         let (g01, g11) = (gather(offset(x0, y1)), gather(offset(x1, y1)));
@@ -139,6 +154,7 @@ mod avx2 {
         for (k, o) in out.chunks_exact_mut(3).enumerate() {
             o.copy_from_slice(&[planes[0][k], planes[1][k], planes[2][k]]);
         }
+        true
     }
 }
 
