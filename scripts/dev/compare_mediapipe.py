@@ -1,7 +1,10 @@
 """Side by side: MediaPipe FaceMesh (Python, landmarks only, XNNPACK) against `visage bench`
 (landmarks, metric face fit, fusion, quality figures) on the same clips, alternated.
 
-    python compare_mediapipe.py VISAGE_BINARY CLIP... [--pairs N]
+    python compare_mediapipe.py VISAGE_BINARY CLIP... [--pairs N] [--refine]
+
+`--refine` runs FaceMesh with `refine_landmarks=True` (its attention model: 478 landmarks with
+the irises), the nearest MediaPipe comes to visage's landmarks and irises.
 
 Run through scripts/dev/compare_mediapipe.sh, which makes the pinned environment. For each clip
 and pair it runs MediaPipe, then visage, and prints per run:
@@ -23,13 +26,13 @@ import sys
 import time
 
 
-def mediapipe_run(clip):
+def mediapipe_run(clip, refine):
     """Runs FaceMesh over every frame of `clip` in a fresh process; returns its figures."""
     code = r"""
 import json, resource, sys, time
 import cv2, mediapipe as mp
 mesh = mp.solutions.face_mesh.FaceMesh(static_image_mode=False, max_num_faces=1,
-                                       refine_landmarks=False)
+                                       refine_landmarks=sys.argv[2] == "refine")
 cap = cv2.VideoCapture(sys.argv[1])
 ok, frame = cap.read()
 mesh.process(cv2.cvtColor(frame, cv2.COLOR_BGR2RGB))  # start-up: graph and first inference
@@ -48,7 +51,8 @@ cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
 print(json.dumps({"frames": frames, "found": found, "fps": frames / wall,
                   "cpu_ms": 1e3 * cpu / frames, "rss_mib": r1.ru_maxrss / 1024}))
 """
-    out = subprocess.run([sys.executable, "-c", code, clip], check=True,
+    out = subprocess.run([sys.executable, "-c", code, clip, "refine" if refine else "plain"],
+                         check=True,
                          capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -73,15 +77,19 @@ def main():
         i = args.index("--pairs")
         pairs = int(args[i + 1])
         del args[i:i + 2]
+    refine = "--refine" in args
+    if refine:
+        args.remove("--refine")
     if len(args) < 2:
         sys.exit(__doc__)
     binary, clips = args[0], args[1:]
-    print(f"load average at start: {open('/proc/loadavg').read().split()[:3]}")
+    print(f"load average at start: {open('/proc/loadavg').read().split()[:3]}; "
+          f"MediaPipe refine_landmarks={refine}")
     for clip in clips:
         runs = {"mediapipe": [], "visage": []}
         for k in range(pairs):
             for tool in ("mediapipe", "visage"):
-                r = mediapipe_run(clip) if tool == "mediapipe" else visage_run(binary, clip)
+                r = mediapipe_run(clip, refine) if tool == "mediapipe" else visage_run(binary, clip)
                 runs[tool].append(r)
                 print(f"{clip} pair {k + 1} {tool}: " + ", ".join(
                     f"{key} {value:.1f}" if isinstance(value, float) else f"{key} {value}"

@@ -161,6 +161,22 @@ pub fn conv2d<M: Madd>(
             let dst = &mut patch[..red];
             gather(x, win, ci, oy, ox, dst);
             let o = (oy * win.out_w + ox) * co;
+            #[cfg(target_arch = "x86_64")]
+            if avx512 {
+                let at = super::avx512::InPlace {
+                    base: 0,
+                    step: red,
+                    k_h: 1,
+                    row: 0,
+                    run: red,
+                };
+                // SAFETY: the CPU has AVX-512F (tested above).
+                #[allow(unsafe_code)]
+                unsafe {
+                    super::avx512::conv_rows(dst, &at, 1, &wts.panels, &wts.bias, relu, y, o)
+                };
+                continue;
+            }
             gemm_rows::<M, 1>(dst, red, &wts.w, &wts.bias, 0, relu, &mut y[o..o + co]);
         }
         if lo == hi {
