@@ -20,7 +20,27 @@ use std::arch::x86_64::{
 
 /// Whether this CPU runs the kernels of this module.
 pub(super) fn available() -> bool {
+    #[cfg(test)]
+    if AVX2_ONLY.with(std::cell::Cell::get) {
+        return false;
+    }
     std::arch::is_x86_feature_detected!("avx512f")
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Set by a test on its own thread to run the AVX2 and generic kernels on a CPU with
+    /// AVX-512, and compare them with these.
+    pub(super) static AVX2_ONLY: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// `f()` with this module's kernels off on this thread (the AVX2 ones run instead).
+#[cfg(test)]
+pub(super) fn without<T>(f: impl FnOnce() -> T) -> T {
+    AVX2_ONLY.with(|c| c.set(true));
+    let out = f();
+    AVX2_ONLY.with(|c| c.set(false));
+    out
 }
 
 /// The mask of the first `n.min(16)` lanes.

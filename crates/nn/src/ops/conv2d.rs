@@ -565,6 +565,25 @@ mod tests {
             for (a, b) in y.iter().zip(&y2) {
                 assert!((a - b).abs() < 1e-5);
             }
+            // The AVX-512 kernel (where the CPU has it) and the AVX2 and generic ones: the same
+            // values bit for bit.
+            #[cfg(target_arch = "x86_64")]
+            {
+                let mut y4 = vec![0.0; y.len()];
+                crate::ops::avx512::without(|| {
+                    conv2d::<crate::ops::Fused>(
+                        &x,
+                        &win,
+                        &wts,
+                        Activation::None,
+                        &mut patch,
+                        &mut y4,
+                    )
+                });
+                for (a, b) in y4.iter().zip(&y2) {
+                    assert_eq!(a.to_bits(), b.to_bits(), "{h}x{w}x{ci}->{co} k{k} s{s}");
+                }
+            }
             let r = reference(&x, &win, &ohwi, &b, ci, co);
             for (a, b) in y.iter().zip(&r) {
                 assert!(

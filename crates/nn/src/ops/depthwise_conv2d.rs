@@ -383,6 +383,18 @@ mod tests {
             let mut y = vec![0.0; win.out_h * win.out_w * c];
             if fused {
                 depthwise_conv2d::<crate::ops::Fused>(&x, &win, c, &k, &b, &mut y);
+                // The AVX-512 kernels (where the CPU has them) and the AVX2 and generic ones:
+                // the same values bit for bit.
+                #[cfg(target_arch = "x86_64")]
+                {
+                    let mut y2 = vec![0.0; y.len()];
+                    crate::ops::avx512::without(|| {
+                        depthwise_conv2d::<crate::ops::Fused>(&x, &win, c, &k, &b, &mut y2)
+                    });
+                    for (p, q) in y.iter().zip(&y2) {
+                        assert_eq!(p.to_bits(), q.to_bits(), "{h}x{w}x{c} s{s}");
+                    }
+                }
             } else {
                 depthwise_conv2d::<crate::ops::Plain>(&x, &win, c, &k, &b, &mut y);
             }
