@@ -100,8 +100,6 @@ pub(crate) fn run_stages(
     let k = face.k;
     let (decoded_tx, decoded_rx) = sync_channel::<Decoded>(QUEUE_CAPACITY);
     let (tracked_tx, tracked_rx) = sync_channel::<(Tracked, Frame)>(QUEUE_CAPACITY);
-    let (modelled_tx, modelled_rx) = sync_channel::<(Tracked, Option<Frame>)>(QUEUE_CAPACITY);
-    let (checked_tx, checked_rx) = sync_channel::<(Tracked, Option<Frame>)>(QUEUE_CAPACITY);
     let (depth_tx, depth_rx) = sync_channel::<Tracked>(QUEUE_CAPACITY);
     let (fused_tx, fused_rx) = sync_channel::<ToSink>(QUEUE_CAPACITY);
     let (recycle_tx, recycle_rx) = sync_channel::<Box<Surfaces>>(2 * QUEUE_CAPACITY + 2);
@@ -121,13 +119,28 @@ pub(crate) fn run_stages(
         let model = &mut model;
         let depth_images = depth.as_ref().is_some_and(DepthStage::needs_image);
         let keep_frames = keypoints.is_some() || depth_images;
-        let modelling =
-            scope.spawn(move || model_stage(model, keep_frames, tracked_rx, modelled_tx));
-        let keypoints = &mut keypoints;
-        let checking =
-            scope.spawn(move || keypoint_stage(keypoints, depth_images, modelled_rx, checked_tx));
-        let depth = &mut depth;
-        let depth_maps = scope.spawn(move || depth_stage(depth, checked_rx, depth_tx));
+        // Without keypoints and outside depth maps, the model stage hands its frames straight
+        // to the fusion: two threads fewer to wake per frame.
+        let direct = keypoints.is_none() && depth.is_none();
+        let (modelling, checking, depth_maps) = if direct {
+            let to_fusion =
+                move |(tracked, _): (Tracked, Option<Frame>)| depth_tx.send(tracked).is_ok();
+            let modelling =
+                scope.spawn(move || model_stage(model, keep_frames, tracked_rx, to_fusion));
+            (modelling, None, None)
+        } else {
+            let (modelled_tx, modelled_rx) = sync_channel(QUEUE_CAPACITY);
+            let (checked_tx, checked_rx) = sync_channel(QUEUE_CAPACITY);
+            let to_checks = move |item| modelled_tx.send(item).is_ok();
+            let modelling =
+                scope.spawn(move || model_stage(model, keep_frames, tracked_rx, to_checks));
+            let keypoints = &mut keypoints;
+            let checking = scope
+                .spawn(move || keypoint_stage(keypoints, depth_images, modelled_rx, checked_tx));
+            let depth = &mut depth;
+            let depth_maps = scope.spawn(move || depth_stage(depth, checked_rx, depth_tx));
+            (modelling, Some(checking), Some(depth_maps))
+        };
         let fusion =
             scope.spawn(move || fuse_stage(&mut fuse, mode, &clip, depth_rx, fused_tx, recycle_rx));
         let sink_error = consumer.run(fused_rx, recycle_tx).err();
@@ -139,8 +152,8 @@ pub(crate) fn run_stages(
                 join(decode, "decode"),
                 join(track, "tracking"),
                 join(modelling, "model"),
-                join(checking, "keypoints"),
-                join(depth_maps, "depth"),
+                checking.and_then(|h| join(h, "keypoints")),
+                depth_maps.and_then(|h| join(h, "depth")),
                 join(fusion, "fusion"),
             ],
             sink_error,
@@ -185,20 +198,21 @@ fn track_stage(
     Ok(())
 }
 
-/// The model fit; the frame goes on only when the keypoint check needs it.
+/// The model fit; the frame goes on only when the keypoint check needs it. `out` hands a frame
+/// to the next stage, `false` when that stage has stopped.
 fn model_stage(
     model: &mut Option<ModelStage>,
     keep_frames: bool,
     input: Receiver<(Tracked, Frame)>,
-    out: SyncSender<(Tracked, Option<Frame>)>,
+    mut out: impl FnMut((Tracked, Option<Frame>)) -> bool,
 ) -> Result<(), Error> {
     for (mut tracked, frame) in input {
         if let Some(model) = model {
             model.fit(&frame.image, &mut tracked)?;
         }
         let frame = keep_frames.then_some(frame);
-        if out.send((tracked, frame)).is_err() {
-            return Ok(());
+        if !out((tracked, frame)) {
+            return Ok(()); // a later stage stopped
         }
     }
     Ok(())
