@@ -3,7 +3,7 @@
 //!
 //! - [`conv_rows`]: a GEMM register block of 12 pixels × 32 output channels (24 accumulators)
 //!   whose left-hand rows are read in place from the input, so one kernel serves the 1×1
-//!   convolutions and the interior windows of the k×k ones;
+//!   convolutions, the interior windows of the k×k ones and their border windows (gathered);
 //! - [`depthwise_row3`]: the depthwise 3×3 row sweep, 16 channels and 8 output columns at a
 //!   time, and [`depthwise_pixel`] for the pixels whose window the input clips.
 //!
