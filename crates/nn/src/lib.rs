@@ -62,8 +62,9 @@
 //! ```
 
 // Unsafe code is denied except in `network`, whose one block calls the AVX2 + FMA build of the
-// kernels after the run-time CPU check, and in the explicit vector kernels (`ops::avx512`, the
-// `avx2` modules of the convolutions and of `bilinear`), each block with its `SAFETY:`.
+// kernels after the run-time CPU check, in `ops::separately` (the same for the memory-bound
+// passes) and in the explicit vector kernels (`ops::avx512`, the `avx2` modules of the
+// convolutions and of `bilinear`), each block with its `SAFETY:`.
 #![deny(unsafe_code)]
 #![deny(unsafe_op_in_unsafe_fn, clippy::undocumented_unsafe_blocks)]
 
