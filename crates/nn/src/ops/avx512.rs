@@ -13,6 +13,7 @@
 //! handled with masked loads and stores, which touch no memory in their masked-off lanes.
 #![allow(unsafe_code)]
 
+use super::depthwise_conv2d::Row3;
 use std::arch::x86_64::{
     __m512, __mmask16, _mm512_fmadd_ps, _mm512_loadu_ps, _mm512_mask_storeu_ps,
     _mm512_maskz_loadu_ps, _mm512_max_ps, _mm512_set1_ps, _mm512_setzero_ps,
@@ -63,6 +64,20 @@ pub(super) struct InPlace {
     pub k_h: usize,
     pub row: usize,
     pub run: usize,
+}
+
+impl InPlace {
+    /// Rows of `len` values one after another from the start (a 1×1 convolution's input, or
+    /// gathered windows).
+    pub(super) fn contiguous(len: usize) -> InPlace {
+        InPlace {
+            base: 0,
+            step: len,
+            k_h: 1,
+            row: 0,
+            run: len,
+        }
+    }
 }
 
 /// Pixels per register block.
@@ -268,17 +283,6 @@ unsafe fn block<const R: usize, const NV: usize>(
     }
 }
 
-/// Where one depthwise row sweep reads and writes: input rows are `row` values apart,
-/// consecutive output columns read `step` values apart; `x0` is the top-left tap of the first
-/// column (channel 0) and `y0` its output; `n` columns.
-pub(super) struct Row3 {
-    pub row: usize,
-    pub step: usize,
-    pub x0: usize,
-    pub y0: usize,
-    pub n: usize,
-}
-
 /// Output columns per register block of [`depthwise_row3`].
 const COLS: usize = 8;
 
@@ -476,16 +480,7 @@ unsafe fn columns<const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn pseudo(n: usize, seed: u32) -> Vec<f32> {
-        let mut s = seed;
-        (0..n)
-            .map(|_| {
-                s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                (s >> 8) as f32 / (1u32 << 24) as f32 - 0.5
-            })
-            .collect()
-    }
+    use crate::ops::test_values;
 
     /// The kernels give the values of scalar fused multiply-adds in the generic kernels' order,
     /// bit for bit, for channel counts with and without a partial block of 16 and pixel counts
@@ -511,9 +506,9 @@ mod tests {
                 run,
             };
             let red = k_h * run;
-            let x = pseudo(2 + (n - 1) * step + (k_h - 1) * row + run, 1);
-            let w = pseudo(red * co, 2);
-            let b = pseudo(co, 3);
+            let x = test_values(2 + (n - 1) * step + (k_h - 1) * row + run, 1);
+            let w = test_values(red * co, 2);
+            let b = test_values(co, 3);
             let packed = pack(&w, red, co);
             let mut y = vec![7.0; 5 + n * co];
             for relu in [false, true] {
@@ -544,9 +539,9 @@ mod tests {
                 y0: 1,
                 n,
             };
-            let x = pseudo(3 + (n - 1) * step + 2 * row + 3 * c, 4);
-            let w = pseudo(9 * c, 5);
-            let b = pseudo(c, 6);
+            let x = test_values(3 + (n - 1) * step + 2 * row + 3 * c, 4);
+            let w = test_values(9 * c, 5);
+            let b = test_values(c, 6);
             let mut y = vec![0.0; 1 + n * c];
             // SAFETY: the CPU has AVX-512F (tested above).
             unsafe { depthwise_row3(&x, &w, &b, &at, &mut y) };
@@ -573,9 +568,9 @@ mod tests {
             k_w,
             y0: 2,
         };
-        let x = pseudo(4 + 3 * row + 3 * c, 7);
-        let w = pseudo(25 * c, 8);
-        let b = pseudo(c, 9);
+        let x = test_values(4 + 3 * row + 3 * c, 7);
+        let w = test_values(25 * c, 8);
+        let b = test_values(c, 9);
         let mut y = vec![0.0; 2 + c];
         // SAFETY: the CPU has AVX-512F (tested above).
         unsafe { depthwise_pixel(&x, &w, &b, &at, &mut y) };

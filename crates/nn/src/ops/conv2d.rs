@@ -84,13 +84,7 @@ pub fn conv2d<M: Madd>(
     if pointwise {
         #[cfg(target_arch = "x86_64")]
         if avx512 {
-            let at = super::avx512::InPlace {
-                base: 0,
-                step: ci,
-                k_h: 1,
-                row: 0,
-                run: ci,
-            };
+            let at = super::avx512::InPlace::contiguous(ci);
             // SAFETY: the CPU has AVX-512F (tested above).
             #[allow(unsafe_code)]
             unsafe {
@@ -163,13 +157,7 @@ pub fn conv2d<M: Madd>(
             let o = (oy * win.out_w + ox) * co;
             #[cfg(target_arch = "x86_64")]
             if avx512 {
-                let at = super::avx512::InPlace {
-                    base: 0,
-                    step: red,
-                    k_h: 1,
-                    row: 0,
-                    run: red,
-                };
+                let at = super::avx512::InPlace::contiguous(red);
                 // SAFETY: the CPU has AVX-512F (tested above).
                 #[allow(unsafe_code)]
                 unsafe {
@@ -481,6 +469,7 @@ mod avx2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ops::test_values;
     use crate::tflite::Padding;
 
     /// Direct definition, f64, for comparison.
@@ -522,16 +511,6 @@ mod tests {
         y
     }
 
-    fn pseudo(n: usize, seed: u32) -> Vec<f32> {
-        let mut s = seed;
-        (0..n)
-            .map(|_| {
-                s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                (s >> 8) as f32 / (1u32 << 24) as f32 - 0.5
-            })
-            .collect()
-    }
-
     #[test]
     fn matches_direct_definition() {
         for &(h, w, ci, co, k, s, pad) in &[
@@ -553,9 +532,9 @@ mod tests {
             (3, 5, 8, 37, 1, 1, Padding::Same),
         ] {
             let win = Window::new(h, w, [k, k], [s, s], pad);
-            let x = pseudo(h * w * ci, 1);
-            let ohwi = pseudo(co * k * k * ci, 2);
-            let b = pseudo(co, 3);
+            let x = test_values(h * w * ci, 1);
+            let ohwi = test_values(co * k * k * ci, 2);
+            let b = test_values(co, 3);
             let wts = Conv2dWeights::from_ohwi(&ohwi, co, k, k, ci, b.clone());
             let mut y = vec![0.0; win.out_h * win.out_w * co];
             let mut patch = vec![0.0; ROWS * k * k * ci];

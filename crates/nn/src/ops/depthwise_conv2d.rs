@@ -73,7 +73,7 @@ pub fn depthwise_conv2d<M: Madd>(
             let iy0 = oy * win.stride_h - win.pad_top;
             #[cfg(target_arch = "x86_64")]
             if avx512 {
-                let at = super::avx512::Row3 {
+                let at = Row3 {
                     row: win.in_w * c,
                     step: win.stride_w * c,
                     x0: iy0 * win.in_w * c + (lo * win.stride_w - win.pad_left) * c,
@@ -94,7 +94,7 @@ pub fn depthwise_conv2d<M: Madd>(
                 let base = iy0 * row + (lo * win.stride_w - win.pad_left) * c;
                 let o = (oy * win.out_w + lo) * c;
                 while cb + 8 <= c {
-                    let at = avx2::Row3 {
+                    let at = Row3 {
                         row,
                         step: win.stride_w * c,
                         x0: base + cb,
@@ -202,21 +202,24 @@ fn interior_row3<M: Madd, const NB: usize>(
 /// that four independent multiply-add chains hide each one's latency (the compiler's version of
 /// the generic kernel keeps one chain of nine dependent multiply-adds, a quarter of the CPU's
 /// throughput, and spills registers when told to keep four).
+/// Where one row sweep of the explicit vector kernels reads and writes: input rows are `row`
+/// values apart, consecutive output columns read `step` values apart; `x0` is the top-left tap
+/// of the first column at the first channel swept (the AVX2 kernel's block, the AVX-512
+/// kernel's channel 0) and `y0` its output; `n` columns.
+#[cfg(target_arch = "x86_64")]
+pub(super) struct Row3 {
+    pub row: usize,
+    pub step: usize,
+    pub x0: usize,
+    pub y0: usize,
+    pub n: usize,
+}
+
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 mod avx2 {
+    use super::Row3;
     use std::arch::x86_64::{__m256, _mm256_fmadd_ps, _mm256_loadu_ps, _mm256_storeu_ps};
-
-    /// Where one row sweep reads and writes: input rows are `row` values apart, consecutive
-    /// output columns read `step` values apart; `x0` is the top-left tap of the first column's
-    /// first channel and `y0` its output; `n` columns.
-    pub(super) struct Row3 {
-        pub row: usize,
-        pub step: usize,
-        pub x0: usize,
-        pub y0: usize,
-        pub n: usize,
-    }
 
     /// Channels `cb .. cb + 8` of `at.n` output columns (`c` channels per pixel).
     ///

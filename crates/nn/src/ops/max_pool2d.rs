@@ -1,11 +1,8 @@
-use super::depthwise_conv2d::valid_taps;
 use super::Window;
 
 /// Max pooling over `k_h × k_w` windows, NHWC (TFLite `MAX_POOL_2D`; padded taps are ignored).
 ///
-/// `x` is `[in_h, in_w, C]`, `y` is `[out_h, out_w, C]`. Row by row: an output row starts at
-/// −∞ and takes the maximum with each of its input rows in turn, so it stays in the L1 cache
-/// while they stream by (one pass per pixel cost more than the maxima at few channels).
+/// `x` is `[in_h, in_w, C]`, `y` is `[out_h, out_w, C]`.
 ///
 /// # Panics
 /// If a slice length does not match the window and channel count.
@@ -14,21 +11,19 @@ use super::Window;
 pub fn max_pool2d(x: &[f32], win: &Window, c: usize, y: &mut [f32]) {
     assert_eq!(x.len(), win.in_h * win.in_w * c, "max_pool input size");
     assert_eq!(y.len(), win.out_h * win.out_w * c, "max_pool output size");
-    if c == 0 {
-        return;
-    }
-    let (in_row, out_row) = (win.in_w * c, win.out_w * c);
-    for (oy, out) in y.chunks_exact_mut(out_row).enumerate() {
-        out.fill(f32::NEG_INFINITY);
-        let (ky0, ky1) = valid_taps(oy, win.stride_h, win.pad_top, win.k_h, win.in_h);
-        for ky in ky0..ky1 {
-            let iy = oy * win.stride_h + ky - win.pad_top;
-            let row = &x[iy * in_row..(iy + 1) * in_row];
-            for (ox, o) in out.chunks_exact_mut(c).enumerate() {
-                let (kx0, kx1) = valid_taps(ox, win.stride_w, win.pad_left, win.k_w, win.in_w);
-                let ix0 = (ox * win.stride_w + kx0).saturating_sub(win.pad_left);
-                for tap in row[ix0 * c..][..(kx1 - kx0) * c].chunks_exact(c) {
-                    for (o, &v) in o.iter_mut().zip(tap) {
+    for oy in 0..win.out_h {
+        for ox in 0..win.out_w {
+            let out = &mut y[(oy * win.out_w + ox) * c..][..c];
+            out.fill(f32::NEG_INFINITY);
+            for ky in 0..win.k_h {
+                let Some(iy) = Window::tap(oy, win.stride_h, ky, win.pad_top, win.in_h) else {
+                    continue;
+                };
+                for kx in 0..win.k_w {
+                    let Some(ix) = Window::tap(ox, win.stride_w, kx, win.pad_left, win.in_w) else {
+                        continue;
+                    };
+                    for (o, &v) in out.iter_mut().zip(&x[(iy * win.in_w + ix) * c..][..c]) {
                         *o = o.max(v);
                     }
                 }
@@ -54,15 +49,9 @@ mod tests {
     #[test]
     fn matches_direct_definition_with_padding() {
         // Windows clipped at every border (SAME padding, odd sizes), a few channels.
-        let mut seed = 11u32;
         for &(h, w, c, k, st) in &[(5, 7, 3, 3, 2), (6, 6, 16, 2, 2), (4, 9, 5, 3, 1)] {
             let win = Window::new(h, w, [k, k], [st, st], Padding::Same);
-            let x: Vec<f32> = (0..h * w * c)
-                .map(|_| {
-                    seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                    (seed >> 8) as f32 / (1u32 << 24) as f32 - 0.5
-                })
-                .collect();
+            let x = crate::ops::test_values(h * w * c, 11);
             let mut y = vec![0.0; win.out_h * win.out_w * c];
             max_pool2d(&x, &win, c, &mut y);
             for oy in 0..win.out_h {

@@ -26,3 +26,15 @@ pub use max_pool2d::max_pool2d;
 pub use pad::pad4;
 pub use resize_bilinear::{resize_bilinear, ResizeAxis};
 pub use window::Window;
+
+/// `n` deterministic test values in [−0.5, 0.5) from `seed` (a linear congruential generator).
+#[cfg(test)]
+pub(crate) fn test_values(n: usize, seed: u32) -> Vec<f32> {
+    let mut s = seed;
+    (0..n)
+        .map(|_| {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (s >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+        })
+        .collect()
+}
