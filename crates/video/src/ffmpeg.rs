@@ -5,8 +5,9 @@
 //! Every decoded frame carries its presentation time ([`Frame::timestamp_s`]), in seconds since
 //! the first frame. Before decoding, `ffprobe` lists the video packets' presentation timestamps
 //! (`-show_entries packet=pts,flags`: the container's index, no decoding, about 0.1 s for a
-//! minute of video; in the same run as the stream's size and rate and FFmpeg's release); discarded packets (flag `D`, e.g. before an MP4 edit list's start) are
-//! dropped and the rest sorted into presentation order. `ffmpeg` runs with `-fps_mode
+//! minute of video; in the same run as the stream's size and rate and FFmpeg's release);
+//! discarded packets (flag `D`, e.g. before an MP4 edit list's start) are dropped and the rest
+//! sorted into presentation order. `ffmpeg` runs with `-fps_mode
 //! passthrough` (`-vsync passthrough` before FFmpeg 5.1), so it hands over every decoded frame
 //! exactly once, in presentation order — without it the
 //! raw-video output is constant-rate and a variable-frame-rate video comes out with frames
