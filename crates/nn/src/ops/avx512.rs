@@ -13,7 +13,7 @@
 //! handled with masked loads and stores, which touch no memory in their masked-off lanes.
 #![allow(unsafe_code)]
 
-use super::depthwise_conv2d::Row3;
+use super::row_sweep::Row3;
 use std::arch::x86_64::{
     __m512, __mmask16, _mm512_fmadd_ps, _mm512_loadu_ps, _mm512_mask_storeu_ps,
     _mm512_maskz_loadu_ps, _mm512_max_ps, _mm512_set1_ps, _mm512_setzero_ps,

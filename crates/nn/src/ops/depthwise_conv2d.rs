@@ -1,3 +1,5 @@
+#[cfg(target_arch = "x86_64")]
+use super::row_sweep::Row3;
 use super::{Madd, Window};
 
 /// Depthwise 2-D convolution with depth multiplier 1, NHWC, as TFLite's `DEPTHWISE_CONV_2D`:
@@ -202,23 +204,10 @@ fn interior_row3<M: Madd, const NB: usize>(
 /// that four independent multiply-add chains hide each one's latency (the compiler's version of
 /// the generic kernel keeps one chain of nine dependent multiply-adds, a quarter of the CPU's
 /// throughput, and spills registers when told to keep four).
-/// Where one row sweep of the explicit vector kernels reads and writes: input rows are `row`
-/// values apart, consecutive output columns read `step` values apart; `x0` is the top-left tap
-/// of the first column at the first channel swept (the AVX2 kernel's block, the AVX-512
-/// kernel's channel 0) and `y0` its output; `n` columns.
-#[cfg(target_arch = "x86_64")]
-pub(super) struct Row3 {
-    pub row: usize,
-    pub step: usize,
-    pub x0: usize,
-    pub y0: usize,
-    pub n: usize,
-}
-
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 mod avx2 {
-    use super::Row3;
+    use crate::ops::row_sweep::Row3;
     use std::arch::x86_64::{__m256, _mm256_fmadd_ps, _mm256_loadu_ps, _mm256_storeu_ps};
 
     /// Channels `cb .. cb + 8` of `at.n` output columns (`c` channels per pixel).

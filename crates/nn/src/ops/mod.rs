@@ -14,6 +14,8 @@ mod madd;
 mod max_pool2d;
 mod pad;
 mod resize_bilinear;
+#[cfg(target_arch = "x86_64")]
+mod row_sweep;
 pub mod separately;
 mod window;
 
