@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 
 use visage_camera::{DepthKind, DepthMap};
-use visage_face::CanonicalMesh;
+use visage_face::{CanonicalMesh, DEFAULT_LANDMARK_SMOOTHING};
 use visage_fem::{ClipOptions, Weights};
 use visage_fusion::{
     FaceDomain, FusionSetup, MeshingOptions, DEFAULT_MAX_DEPTH_M, DOMAIN_MAJORITY,
@@ -94,10 +94,6 @@ pub struct BenchmarkConfig {
     pub expression_modes: Vec<String>,
 }
 
-/// The simulated tracker's landmark smoothing: the pipeline's default
-/// (`visage::DEFAULT_LANDMARK_SMOOTHING`; the CLI's tests check they agree).
-pub const BENCHMARK_LANDMARK_SMOOTHING: f64 = 1500.0;
-
 /// Expressions of the quick setting: the most visible ones of the shared subset.
 pub const QUICK_EXPRESSIONS: [&str; 4] = ["jawOpen", "mouthSmile_L", "eyeBlink_R", "browInnerUp_L"];
 
@@ -116,7 +112,8 @@ impl BenchmarkConfig {
             model_weights: visage_fusion::MODEL_WEIGHTS_MAP,
             anchored_subdivision: ANCHORED_SUBDIVISION,
             tracker: TrackerNoise::default(),
-            landmark_smoothing: Some(BENCHMARK_LANDMARK_SMOOTHING),
+            // The simulated tracker smooths its landmarks as the pipeline does.
+            landmark_smoothing: Some(DEFAULT_LANDMARK_SMOOTHING),
             meshing: MeshingOptions::default(),
             clip: ClipOptions::default(),
             max_depth_m: DEFAULT_MAX_DEPTH_M,

@@ -41,7 +41,7 @@ pub use benchmark::{
     methods, run_benchmark, run_sweep, selected_methods, sequence_seed, tune_taubin, AnchoringInfo,
     BenchmarkConfig, BenchmarkResults, FaceAnchoring, PreparedSequence, SequenceInfo,
     SiftAnchoring, SiftFairingInfo, SweepPoint, TaubinTuning, ANCHORED_SUBDIVISION,
-    ANCHORED_WEIGHTS, BENCHMARK_LANDMARK_SMOOTHING, OPT_IN_METHODS, QUICK_EXPRESSIONS, TUNING_SALT,
+    ANCHORED_WEIGHTS, OPT_IN_METHODS, QUICK_EXPRESSIONS, TUNING_SALT,
 };
 pub use error::EvalError;
 pub use method::{
@@ -66,9 +66,7 @@ pub use sift_fairing::{
     control_order, keypoint_weights, random_control_weights, FairingKeypoints, SiftFairingOptions,
     FAIRING_CONTROL_SALT, SIFT_FAIRING_BASE_WEIGHT, SIFT_FAIRING_RADIUS_PX,
 };
-pub use simulated_tracker::{
-    simulate_tracking, TrackedSequence, TrackerNoise, BENCHMARK_LATENCY_FRAMES,
-};
+pub use simulated_tracker::{simulate_tracking, TrackedSequence, TrackerNoise};
 pub use skin_texture::{sequence_skin_albedo, skin_albedo};
 pub use synthesis::{
     synthesize, SynthesisConfig, SyntheticFrame, SyntheticSequence, EXPRESSION_ACTIVITY,

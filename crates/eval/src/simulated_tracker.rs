@@ -22,6 +22,7 @@ use rand_chacha::ChaCha8Rng;
 use visage_camera::RigidTransform;
 use visage_face::{fit_face_geometry, CanonicalMesh};
 
+use visage_face::DEFAULT_LATENCY_FRAMES;
 use visage_temporal::FixedLagSmoother;
 
 use crate::normal::standard_normal;
@@ -85,9 +86,6 @@ pub struct TrackedSequence {
     pub truth: Vec<Vec<[f64; 3]>>,
 }
 
-/// Latency of the benchmark's landmark smoother, frames (the pipeline's default).
-pub const BENCHMARK_LATENCY_FRAMES: usize = 1;
-
 /// Tracks `seq` with `noise`, deterministically from `seed`; with `smoothing` (the
 /// smoother's acceleration-to-noise ratio, 1/s²) the landmarks go through the pipeline's
 /// temporal model before the fit.
@@ -139,7 +137,7 @@ pub fn simulate_tracking(
         out.truth.push(truth);
     }
     if let Some(ratio) = smoothing {
-        let mut smoother = FixedLagSmoother::new(ratio, BENCHMARK_LATENCY_FRAMES);
+        let mut smoother = FixedLagSmoother::new(ratio, DEFAULT_LATENCY_FRAMES);
         let mut smoothed: Vec<Vec<f64>> = tracked
             .iter()
             .filter_map(|x| smoother.push(x, SYNTHETIC_FRAME_INTERVAL_S))

@@ -114,7 +114,7 @@ fn simulated_tracker_sees_the_truth_with_the_configured_noise() {
     };
     let sigma = error(&n1);
     // The pipeline's smoother takes out part of the noise (the white part most).
-    let smoothed = error(&track(Some(visage_eval::BENCHMARK_LANDMARK_SMOOTHING)));
+    let smoothed = error(&track(Some(visage_face::DEFAULT_LANDMARK_SMOOTHING)));
     assert!(smoothed < 0.9 * sigma, "{smoothed} vs {sigma}");
     let expected = (noise.white_px.powi(2) + noise.correlated_px.powi(2)).sqrt();
     assert!(

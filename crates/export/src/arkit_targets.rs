@@ -7,12 +7,13 @@
 //! driven by the run's weight curves; the residual targets carry what they do not explain.
 
 use rayon::prelude::*;
-use visage::{IctSource, ARKIT_BLENDSHAPES, ICT_TO_ARKIT};
 use visage_camera::RigidTransform;
 use visage_mesh::point_to_mesh::closest_point_barycentric;
 use visage_morphable::FaceModel;
+use visage_rig::{IctSource, ARKIT_BLENDSHAPES, ICT_TO_ARKIT};
 
 use crate::capture::Capture;
+use visage_run_folder::file_names;
 
 /// ARKit targets on `base` (the mesh's mean surface, head coordinates, y up, metres), or
 /// `None` when the run has no blendshape curves, no fitted identity of the built-in model, or
@@ -105,7 +106,7 @@ pub fn arkit_targets(capture: &Capture, base: &[[f64; 3]]) -> Option<Vec<Vec<[f6
 }
 
 fn read_identity(capture: &Capture) -> Option<Vec<f64>> {
-    let text = std::fs::read_to_string(capture.dir.join("identity.json")).ok()?;
+    let text = std::fs::read_to_string(capture.dir.join(file_names::IDENTITY)).ok()?;
     let json: serde_json::Value = serde_json::from_str(&text).ok()?;
     json["coefficients"]
         .as_array()?

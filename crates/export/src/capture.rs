@@ -5,10 +5,10 @@
 use std::path::{Path, PathBuf};
 
 use serde_json::Value;
-use visage::{CACHE_MESH_FILE, POINT_CACHE_FILE};
 use visage_camera::{Intrinsics, RigidTransform};
 use visage_mesh::io::{read_obj, read_pc2};
 use visage_mesh::TriMesh;
+use visage_run_folder::file_names;
 
 use crate::ExportError;
 
@@ -61,13 +61,13 @@ impl Capture {
     /// A missing or malformed file (named), or files that do not belong together (a point cache
     /// with another number of frames or vertices than the metrics and the mesh say).
     pub fn open(dir: &Path) -> Result<Capture, ExportError> {
-        let intrinsics = Intrinsics::load_json(&dir.join("camera.json"))?;
-        let metrics_path = dir.join("metrics.json");
+        let intrinsics = Intrinsics::load_json(&dir.join(file_names::CAMERA))?;
+        let metrics_path = dir.join(file_names::METRICS);
         let metrics = read_json(&metrics_path)?;
         let input = PathBuf::from(metrics["input"].as_str().unwrap_or_default());
-        let obj = dir.join(CACHE_MESH_FILE);
+        let obj = dir.join(file_names::CACHE_MESH);
         let mut mesh = read_obj(&obj)?;
-        let cache_path = dir.join(POINT_CACHE_FILE);
+        let cache_path = dir.join(file_names::POINT_CACHE);
         let cache = read_pc2(&cache_path)?;
         let frames = parse_frames(&metrics, &metrics_path)?;
         let mismatch = |reason: String| ExportError::Mismatch {
@@ -101,7 +101,7 @@ impl Capture {
             .chunks_exact(3)
             .map(|p| [p[0] as f64, p[1] as f64, p[2] as f64])
             .collect();
-        let blendshapes_path = dir.join("blendshapes.json");
+        let blendshapes_path = dir.join(file_names::BLENDSHAPES_JSON);
         let blendshapes = if blendshapes_path.is_file() {
             Some(parse_blendshapes(
                 &read_json(&blendshapes_path)?,

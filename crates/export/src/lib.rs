@@ -20,11 +20,11 @@ mod preview;
 mod report;
 mod texture_fusion;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
-use visage::{CACHE_MATERIAL, CACHE_MATERIAL_FILE};
+use visage_run_folder::{file_names, CACHE_MATERIAL};
 use visage_video::{Frame, FrameSource};
 
 pub use capture::{Blendshapes, Capture, CaptureFrame};
@@ -93,7 +93,7 @@ pub struct ExportSummary {
 
 /// Chooses, as an input is decoded, the frames the texture is fused from: every n-th of the
 /// first [`TEXTURE_SECONDS`], so that about [`TEXTURE_FRAMES`] are kept (`fps` the input's rate,
-/// 30 when unknown). For [`visage::Input::keep_copies`], so a run keeps them for [`export`].
+/// 30 when unknown). For the `visage` crate's `Input::keep_copies`, so a run keeps them for [`export`].
 pub fn texture_frames(fps: Option<f64>) -> impl FnMut(&Frame) -> bool + Send + 'static {
     let fps = fps.filter(|f| f.is_finite() && *f > 0.0).unwrap_or(30.0);
     let step = ((fps * TEXTURE_SECONDS / TEXTURE_FRAMES as f64).round() as usize).max(1);
@@ -127,15 +127,15 @@ pub fn export(
         let t = Instant::now();
         match make_texture(&capture, frames)? {
             Some((texture, png)) => {
-                write_file(&dir.join("texture.png"), &png)?;
+                write_file(&dir.join(file_names::TEXTURE), &png)?;
                 visage_mesh::io::write_mtl(
-                    &dir.join(CACHE_MATERIAL_FILE),
+                    &dir.join(file_names::CACHE_MATERIAL_FILE),
                     CACHE_MATERIAL,
-                    Some("texture.png"),
+                    Some(file_names::TEXTURE),
                 )?;
                 summary.texture_frames = texture.frames_used;
                 summary.texture_coverage = Some(texture.coverage);
-                summary.files.push(file_entry(dir, "texture.png", t));
+                summary.files.push(file_entry(dir, file_names::TEXTURE, t));
                 texture_image = Some(texture.image);
                 Some(png)
             }
@@ -181,18 +181,18 @@ pub fn export(
         let renders = frame_renders::frame_renders(&capture, texture_image.as_ref())?;
         let viewer = VIEWER_JS.zip(glb.as_deref());
         let html = report_html(&capture, &summary, &plots, &renders, viewer);
-        write_file(&dir.join("report.html"), html.as_bytes())?;
-        summary.files.push(file_entry(dir, "report.html", t));
+        write_file(&dir.join(file_names::REPORT), html.as_bytes())?;
+        summary.files.push(file_entry(dir, file_names::REPORT, t));
     }
     if options.preview {
         let t = Instant::now();
-        write_preview(&capture, &dir.join("preview.mp4"))?;
-        summary.files.push(file_entry(dir, "preview.mp4", t));
+        write_preview(&capture, &dir.join(file_names::PREVIEW))?;
+        summary.files.push(file_entry(dir, file_names::PREVIEW, t));
     }
     summary.total_ms = start.elapsed().as_secs_f64() * 1e3;
     let text =
         serde_json::to_string_pretty(&summary).map_err(|e| ExportError::Internal(e.to_string()))?;
-    write_file(&dir.join("export.json"), text.as_bytes())?;
+    write_file(&dir.join(file_names::EXPORT), text.as_bytes())?;
     Ok(summary)
 }
 
@@ -206,12 +206,12 @@ fn make_glb(
     let animation = MorphAnimation::encode(capture, |base| {
         let deltas = arkit_targets::arkit_targets(capture, base)?;
         let curves = capture.blendshapes.as_ref()?;
-        let order: Vec<Option<usize>> = visage::ARKIT_BLENDSHAPES
+        let order: Vec<Option<usize>> = visage_rig::ARKIT_BLENDSHAPES
             .iter()
             .map(|a| curves.names.iter().position(|n| n == a))
             .collect();
         Some(NamedTargets {
-            names: visage::ARKIT_BLENDSHAPES
+            names: visage_rig::ARKIT_BLENDSHAPES
                 .iter()
                 .map(|s| s.to_string())
                 .collect(),
@@ -242,20 +242,20 @@ fn make_glb(
         texture_png,
         extras,
     )?;
-    write_file(&dir.join("sequence.glb"), &bytes)?;
-    Ok((bytes, animation, file_entry(dir, "sequence.glb", t)))
+    write_file(&dir.join(file_names::GLB), &bytes)?;
+    Ok((bytes, animation, file_entry(dir, file_names::GLB, t)))
 }
 
 /// The per-frame charts, written to `plots/`.
 fn make_plots(capture: &Capture, dir: &Path) -> Result<(Vec<Plot>, ExportedFile), ExportError> {
     let t = Instant::now();
-    let landmarks_path = dir.join("landmarks.json");
+    let landmarks_path = dir.join(file_names::LANDMARKS);
     let landmarks = landmarks_path
         .is_file()
         .then(|| capture::read_json(&landmarks_path))
         .transpose()?;
     let plots = run_plots(capture, landmarks.as_ref());
-    let plot_dir = dir.join("plots");
+    let plot_dir = dir.join(file_names::PLOTS_FOLDER);
     std::fs::create_dir_all(&plot_dir).map_err(|source| ExportError::Write {
         path: plot_dir.clone(),
         source,
@@ -264,7 +264,7 @@ fn make_plots(capture: &Capture, dir: &Path) -> Result<(Vec<Plot>, ExportedFile)
         write_file(&plot_dir.join(p.file), p.svg.as_bytes())?;
     }
     let file = ExportedFile {
-        file: "plots/".into(),
+        file: format!("{}/", file_names::PLOTS_FOLDER),
         bytes: plots.iter().map(|p| p.svg.len() as u64).sum(),
         ms: t.elapsed().as_secs_f64() * 1e3,
     };
@@ -423,8 +423,7 @@ pub(crate) fn png_bytes(image: &image::RgbImage) -> Result<Vec<u8>, ExportError>
 }
 
 fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ExportError> {
-    let mut tmp: PathBuf = path.to_owned().into_os_string().into();
-    tmp.as_mut_os_string().push(".tmp");
+    let tmp = visage_run_folder::tmp_path(path);
     std::fs::write(&tmp, bytes)
         .and_then(|()| std::fs::rename(&tmp, path))
         .map_err(|source| ExportError::Write {

@@ -11,6 +11,7 @@ use serde_json::Value;
 use crate::capture::Capture;
 use crate::plots::Plot;
 use crate::ExportSummary;
+use visage_run_folder::file_names;
 
 /// The viewer bundle (`web/viewer/dist/viewer.js`), when it was built before visage.
 #[cfg(viewer_bundle)]
@@ -111,11 +112,11 @@ pub fn report_html(
         );
     }
     for f in [
-        "sequence.pc2",
-        "mesh.obj",
-        "blendshapes.csv",
-        "metrics.json",
-        "landmarks.json",
+        file_names::POINT_CACHE,
+        file_names::CACHE_MESH,
+        file_names::BLENDSHAPES_CSV,
+        file_names::METRICS,
+        file_names::LANDMARKS,
     ] {
         if capture.dir.join(f).is_file() {
             let _ = writeln!(h, "<li><a href=\"{f}\">{f}</a></li>");
@@ -203,7 +204,7 @@ fn summary_rows(m: &Value, e: &ExportSummary) -> Vec<(String, String)> {
     ];
     if let Some(rms) = e.glb_rms_error_m {
         rows.push((
-            "sequence.glb".into(),
+            file_names::GLB.into(),
             format!(
                 "{} morph targets ({} ARKit), {:.3} mm RMS from the point cache",
                 e.named_targets + e.residual_targets,

@@ -35,14 +35,22 @@ pub use detector::{DetectorModel, DetectorOptions, FaceDetector, ResizeFilter};
 pub mod crop;
 mod face;
 pub mod face_mesh;
+mod landmark_smoothing;
 pub mod landmarker;
 pub mod roi;
+mod shot_cut;
 pub mod tracker;
 
 pub use face::{points_bbox, Face};
 pub use face_mesh::{DetectorUse, FaceMesh, FULL_RANGE_TILE};
+pub use landmark_smoothing::{
+    DistanceSmoother, LandmarkSmoother, CLIP_LATENCY_FRAMES, DEFAULT_DISTANCE_SMOOTHING,
+    DEFAULT_FRAME_INTERVAL_S, DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES,
+    MAX_LATENCY_FRAMES,
+};
 pub use landmarker::{FaceLandmarker, FrameLandmarks};
 pub use roi::Roi;
+pub use shot_cut::{face_jumped, CutDetector, CUT_FACE_JUMP, CUT_PICTURE_CHANGE};
 pub use tracker::{box_proximity, FaceTarget, FaceTracker, TrackStep};
 pub mod eye_crop;
 pub mod iris;

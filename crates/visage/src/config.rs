@@ -15,10 +15,8 @@ use visage_fusion::{
 
 use visage_morphable::{FaceModel, FitOptions};
 
-use crate::landmark_smoothing::{
-    DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES, MAX_LATENCY_FRAMES,
-};
 use crate::{Error, Input};
+use visage_face::{DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES, MAX_LATENCY_FRAMES};
 
 /// Default subdivision of the FaceMesh template for the face mesh (≈ 1.8k vertices).
 pub const DEFAULT_SUBDIVISION: usize = 2;
@@ -132,6 +130,32 @@ pub struct Parameters {
     pub latency_frames: usize,
     /// Whether SIFT keypoints check the head's motion.
     pub keypoint_motion: bool,
+}
+
+impl visage_run_folder::RunParameters for Parameters {
+    fn cannot_resume(&self) -> Option<&'static str> {
+        if self.mode == TemporalMode::Clip {
+            return Some(
+                "a clip-mode run solves the whole clip at once and cannot go on part-way. Pass \
+                 --overwrite to start again",
+            );
+        }
+        if self.fusion.mesh == MeshKind::Image {
+            return Some(
+                "the image-plane mesh is built from the first frame's face, and a resumed run \
+                 would build another. Pass --overwrite to start again",
+            );
+        }
+        None
+    }
+
+    fn latency_frames(&self) -> usize {
+        self.latency_frames
+    }
+
+    fn fits_model(&self) -> bool {
+        self.model != "none"
+    }
 }
 
 /// Sets up a [`crate::Reconstructor`]. Every option has a default: the face mesh on the face

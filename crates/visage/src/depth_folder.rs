@@ -13,14 +13,13 @@ use visage_fusion::{
 };
 use visage_mesh::io::PlyFormat;
 
-use crate::metrics::{
-    FrameMetrics, FrameQuality, MeshSummary, Report, RunStatus, RunTiming, SolverSummary,
-};
 use crate::process_stats::{cpu_seconds, peak_rss_mib};
 use crate::reconstructor::error_chain;
 use crate::recorder::Recorder;
-use crate::sink::{FrameSink, MeshFrame};
 use crate::{Error, OutputDir, Surfaces, TemporalMode};
+use visage_run_folder::{
+    FrameMetrics, FrameQuality, MeshSummary, Report, RunStatus, RunTiming, SolverSummary,
+};
 
 /// Options of a depth-folder fusion, as `metrics.json` records them.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -257,12 +256,8 @@ impl DepthRun<'_> {
         s.fused.extend_from_slice(self.fuser.solution());
         s.raw.clear();
         s.raw.extend_from_slice(self.fuser.raw());
-        self.recorder.measure(position, &self.k, s);
-        self.out.mesh(&MeshFrame {
-            uvs: &[],
-            index: self.recorder.frames[position].index,
-            triangles: self.fuser.triangles(),
-            surfaces: s,
-        })
+        let triangles = self.fuser.triangles();
+        self.recorder
+            .mesh(position, &self.k, s, triangles, &[], &mut *self.out)
     }
 }

@@ -12,9 +12,9 @@ use visage_face::{render_faces_depth, render_surface_depth, CanonicalMesh};
 use visage_fusion::DepthSequence;
 use visage_mesh::TriMesh;
 
-use crate::metrics::DepthAlignmentMetrics;
 use crate::stages::Tracked;
 use crate::Error;
+use visage_run_folder::DepthAlignmentMetrics;
 
 /// Where the maps come from.
 pub(crate) enum MapSource {

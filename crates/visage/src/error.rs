@@ -7,7 +7,6 @@ use visage_camera::CameraError;
 use visage_face::FaceError;
 use visage_fem::FemError;
 use visage_fusion::FusionError;
-use visage_mesh::io::MeshIoError;
 use visage_video::VideoError;
 
 /// What can stop a reconstruction.
@@ -32,6 +31,9 @@ pub enum Error {
     Solver(#[from] FemError),
     #[error(transparent)]
     Model(#[from] visage_morphable::MorphableError),
+    /// An output folder's file could not be written, read or continued.
+    #[error(transparent)]
+    RunFolder(#[from] visage_run_folder::RunFolderError),
     /// A depth network or RGB-D recording failed (the cause names the file).
     #[error(transparent)]
     Depth(Box<visage_depth::DepthError>),
@@ -52,25 +54,6 @@ pub enum Error {
         frames: usize,
         index: usize,
     },
-    /// An output file or folder could not be written.
-    #[error("cannot write {}", path.display())]
-    Write {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    /// A file of a previous run could not be read.
-    #[error("cannot read {}", path.display())]
-    Read {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    /// A previous run in an output folder cannot be continued (`reason` says why and what to
-    /// do instead).
-    #[error("{}: cannot resume the run in this folder: {reason}", dir.display())]
-    Resume { dir: PathBuf, reason: String },
-    /// A mesh file could not be written.
-    #[error("cannot write {}", path.display())]
-    WriteMesh { path: PathBuf, source: MeshIoError },
     /// No frame of the input showed a face (neither detector found one).
     #[error("no face was found in any of the {frames} frames")]
     NoFace { frames: usize },

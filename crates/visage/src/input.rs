@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
+use visage_run_folder::FrameSelection;
 use visage_video::{focal_length_35mm, is_image_path, read_image, Frame, FrameSource};
 
 use crate::Error;
@@ -28,15 +29,8 @@ pub struct Input {
     stop: Option<Arc<AtomicBool>>,
 }
 
-/// Which of an input's frames a run processes: every `every`-th, at most `max_frames` of them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-pub struct FrameSelection {
-    pub every: usize,
-    pub max_frames: Option<usize>,
-}
-
 /// Chooses the frames [`Input::keep_copies`] copies.
-type FrameFilter = Box<dyn FnMut(&Frame) -> bool + Send>;
+pub type FrameFilter = Box<dyn FnMut(&Frame) -> bool + Send>;
 
 /// Copies of some of an input's frames, taken as they are decoded (on whichever thread decodes
 /// them) and kept for after the run — e.g. to colour a texture without decoding again.

@@ -20,8 +20,8 @@ use visage_keypoints::{
 };
 use visage_morphable::fit::rigid_pose::mat3_mul;
 
-use crate::metrics::KeypointMotionMetrics;
 use crate::stages::{Tracked, TrackedFace};
+use visage_run_folder::KeypointMotionMetrics;
 
 /// The face box is widened by this fraction of its size on each side before detection.
 pub const FACE_MARGIN: f64 = 0.1;

@@ -44,80 +44,35 @@
 
 #![forbid(unsafe_code)]
 
-mod animation;
-mod atomic_write;
 mod config;
 mod depth_folder;
 mod depth_stage;
 mod error;
-mod gaze;
-mod histogram;
+mod folder_run;
 mod input;
-mod json_records;
 mod keypoint_motion;
-mod landmark_smoothing;
-mod landmarks;
-mod lid_gate;
-mod metrics;
-mod output;
 mod pipeline;
 mod process_stats;
 mod quality;
 mod reconstructor;
 mod recorder;
-mod rest_pose;
-mod resume;
-mod resume_point;
 mod rigid_jitter;
-mod run_folder;
-mod shot_cut;
 mod sink;
 mod stages;
 
-pub use animation::{
-    live_link_angles, live_link_timecode, BlendshapeFrame, BlendshapeTrack, BlendshapesJsonWriter,
-    IctSource, IctToArkit, LiveLinkCsvWriter, ARKIT_BLENDSHAPES, ARKIT_BLENDSHAPE_COUNT,
-    BLENDSHAPES_CSV, BLENDSHAPES_JSON, ICT_EXPRESSIONS, ICT_TO_ARKIT, LIVE_LINK_BLENDSHAPES,
-    LIVE_LINK_ROTATIONS, LIVE_LINK_VALUE_COUNT,
-};
-pub use atomic_write::{write_atomically, write_json_atomically};
 pub use config::{
     check_fov, Builder, Camera, DepthSource, ModelSource, Parameters, TemporalMode,
     DEFAULT_SUBDIVISION,
 };
 pub use depth_folder::{fuse_depth_folder, FuseOptions};
 pub use error::Error;
-pub use gaze::{eye_gaze, eye_look_weights, EyeGaze};
-pub use input::{FrameSelection, Input, KeptFrames};
+pub use folder_run::{run_into, FolderOptions, FolderRun};
+pub use input::{FrameFilter, Input, KeptFrames};
 pub use keypoint_motion::{
     FACE_MARGIN, INLIER_THRESHOLD_M, MAX_FACE_CROP_PX, MAX_FACE_KEYPOINTS, MIN_INLIERS,
 };
-pub use landmark_smoothing::{
-    CLIP_LATENCY_FRAMES, DEFAULT_DISTANCE_SMOOTHING, DEFAULT_FRAME_INTERVAL_S,
-    DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES, MAX_LATENCY_FRAMES,
-};
-pub use landmarks::{FaceRecord, LandmarksFrame, PoseRecord};
-pub use metrics::{
-    DepthAlignmentMetrics, DepthAlignmentSummary, FrameMetrics, FrameQuality, FrameStatus,
-    KeypointMotionSummary, MeshSummary, Percentiles, PoseMetrics, Report, RunStatus, RunSummary,
-    RunTiming, SolverSummary, StageTimes,
-};
-pub use output::{
-    camera_to_y_up, OutputDir, CACHE_MATERIAL, CACHE_MATERIAL_FILE, CACHE_MESH_FILE,
-    DEFAULT_TIMECODE_FPS, POINT_CACHE_FILE,
-};
-pub use pipeline::QUEUE_CAPACITY;
-pub use quality::{FusedAndRaw, QualitySummary};
 pub use reconstructor::{error_chain, FrameResult, Identity, Reconstructor, RunOutcome};
-pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP};
-pub use resume::{prepare_resume, ResumeState};
-pub use resume_point::{ResumePoint, RunDescription, WARM_UP_FRAMES};
 pub use rigid_jitter::rigid_residual_rms;
-pub use run_folder::{
-    clear_outputs, inspect as inspect_output_folder, FolderContents, FACE_FOLDER_PREFIX,
-    OUTPUT_FILES, OUTPUT_FOLDERS,
-};
-pub use shot_cut::{CUT_FACE_JUMP, CUT_PICTURE_CHANGE};
 pub use sink::{FrameSink, MeshFrame};
 pub use stages::Surfaces;
 
@@ -126,10 +81,20 @@ pub use visage_depth::{
     AlignMode, DepthNetwork, EdgeMask, NetworkConfig, NetworkRegion, OutputKind, Registration,
     RgbdLayout, RgbdOptions, RgbdRecording,
 };
-pub use visage_face::FaceTarget;
+pub use visage_face::{
+    FaceTarget, CLIP_LATENCY_FRAMES, CUT_FACE_JUMP, CUT_PICTURE_CHANGE, DEFAULT_DISTANCE_SMOOTHING,
+    DEFAULT_FRAME_INTERVAL_S, DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES,
+    MAX_LATENCY_FRAMES,
+};
 pub use visage_fem::{ClipOptions, Weights};
 pub use visage_fusion::{DepthSequence, MeshKind, MeshingOptions, DEFAULT_MAX_DEPTH_M};
 pub use visage_mesh::io::{write_ply, PlyFormat};
 pub use visage_mesh::{TriMesh, TriangulationKind};
 pub use visage_morphable::{FaceModel, FitOptions};
+pub use visage_rig::{BlendshapeFrame, BlendshapeTrack, ARKIT_BLENDSHAPES};
+pub use visage_run_folder as run_folder;
+pub use visage_run_folder::{
+    file_names, write_atomically, write_json_atomically, FrameMetrics, FrameSelection, FrameStatus,
+    LandmarksFrame, OutputDir, Report, RunStatus, RunSummary,
+};
 pub use visage_video::Frame;

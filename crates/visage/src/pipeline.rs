@@ -30,17 +30,17 @@ use visage_fusion::ClipFrame;
 use visage_morphable::FaceFitter;
 use visage_video::Frame;
 
-use crate::animation::BlendshapeFrame;
 use crate::depth_stage::DepthStage;
 use crate::input::Decoded;
 use crate::keypoint_motion::KeypointMotion;
-use crate::landmarks::LandmarksFrame;
-use crate::metrics::{FrameMetrics, FrameQuality, RunTiming};
 use crate::process_stats::{cpu_seconds, peak_rss_mib};
 use crate::recorder::Recorder;
-use crate::sink::{FrameSink, MeshFrame};
+use crate::sink::FrameSink;
 use crate::stages::{FaceStage, FuseStage, ModelStage, Surfaces, Tracked};
 use crate::{Error, Input, TemporalMode};
+use visage_rig::BlendshapeFrame;
+use visage_run_folder::LandmarksFrame;
+use visage_run_folder::{FrameMetrics, FrameQuality, RunTiming};
 
 /// Frames waiting between two stages.
 pub const QUEUE_CAPACITY: usize = 3;
@@ -442,12 +442,8 @@ impl Consumer<'_> {
 
     /// Measures a meshed frame and hands it to the sink.
     fn mesh(&mut self, position: usize, s: &Surfaces) -> Result<(), Error> {
-        self.recorder.measure(position, &self.k, s);
-        self.sink.mesh(&MeshFrame {
-            index: self.recorder.frames[position].index,
-            triangles: self.triangles,
-            uvs: &self.uvs,
-            surfaces: s,
-        })
+        let (k, triangles, uvs) = (&self.k, &self.triangles[..], &self.uvs);
+        self.recorder
+            .mesh(position, k, s, triangles, uvs, &mut *self.sink)
     }
 }

@@ -4,43 +4,10 @@
 //! second-difference jitter of the fused landmarks against the tracked ones (what the temporal
 //! model is judged by).
 
-use serde::Serialize;
 use visage_camera::Intrinsics;
+use visage_run_folder::{FusedAndRaw, QualitySummary};
 
 use crate::rigid_jitter::JitterMeter;
-
-/// A figure for the fused surface and the raw one.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct FusedAndRaw {
-    pub fused: Option<f64>,
-    pub raw: Option<f64>,
-}
-
-/// The quality figures of a run.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct QualitySummary {
-    /// Mean over consecutive meshed frames of the RMS vertex motion after the best rigid
-    /// alignment (mm), over all mesh vertices. Image mesh: vertices are fixed pixels, not
-    /// fixed points of the face, so compare the designs on `landmark_jitter_mm`.
-    pub vertex_jitter_mm: FusedAndRaw,
-    /// The same on the surface at the 468 landmarks (image mesh: interpolated at the landmark
-    /// pixels; landmarks outside the mesh are left out of the pair). None without landmarks
-    /// (a depth folder).
-    pub landmark_jitter_mm: FusedAndRaw,
-    /// Mean over meshed frames of the mean landmark reprojection error (px).
-    pub reprojection_px: FusedAndRaw,
-    /// RMS over frames and landmarks of the second difference ‖p(t+1) − 2p(t) + p(t−1)‖ (px)
-    /// of the fused landmarks projected into the image (`fused`) and of the tracked ones
-    /// (`raw`), over runs of consecutive meshed frames.
-    pub image_jitter_px: FusedAndRaw,
-    /// `raw / fused` image jitter: how much steadier than tracked.
-    pub image_jitter_reduction: Option<f64>,
-    /// Consecutive frame pairs measured.
-    pub pairs: usize,
-    /// `raw / fused` vertex and landmark jitter.
-    pub vertex_jitter_reduction: Option<f64>,
-    pub landmark_jitter_reduction: Option<f64>,
-}
 
 /// Accumulates the quality figures frame by frame (memory: one frame of each surface).
 #[derive(Default)]

@@ -12,22 +12,22 @@ use visage_mesh::TriMesh;
 use visage_morphable::{CanonicalCorrespondence, FaceFitter, FaceModel, IctModel};
 use visage_video::Frame;
 
-use crate::animation::{BlendshapeFrame, IctToArkit};
 use crate::config::{Builder, ModelSource, Parameters};
 use crate::depth_stage::{DepthStage, MapSource, NetworkDepth};
 use crate::keypoint_motion::KeypointMotion;
-use crate::landmark_smoothing::{
-    DistanceSmoother, LandmarkSmoother, CLIP_LATENCY_FRAMES, DEFAULT_DISTANCE_SMOOTHING,
-};
-use crate::landmarks::LandmarksFrame;
-use crate::lid_gate::LidGate;
-use crate::metrics::{FrameMetrics, MeshSummary, Report, RunStatus, RunSummary, RunTiming};
 use crate::pipeline::{run_stages, Stages};
 use crate::recorder::Recorder;
-use crate::rest_pose::RestPose;
-use crate::shot_cut::CutDetector;
 use crate::stages::{FaceStage, FuseStage, FusedDepth, ModelStage, Surfaces};
 use crate::{DepthSource, Error, FrameSink, Input, TemporalMode};
+use visage_face::CutDetector;
+use visage_face::{
+    DistanceSmoother, LandmarkSmoother, CLIP_LATENCY_FRAMES, DEFAULT_DISTANCE_SMOOTHING,
+};
+use visage_rig::LidGate;
+use visage_rig::RestPose;
+use visage_rig::{BlendshapeFrame, IctToArkit};
+use visage_run_folder::LandmarksFrame;
+use visage_run_folder::{FrameMetrics, MeshSummary, Report, RunStatus, RunSummary, RunTiming};
 
 /// The video pipeline: face tracking, landmarks and the metric face fit, depth, and fusion into
 /// a temporally stable metric surface on a fixed mesh. Set up once ([`Reconstructor::builder`]:
@@ -502,6 +502,8 @@ impl Builder {
 mod tests {
     use super::*;
 
+    use visage_run_folder::RunFolderError;
+
     #[derive(Debug)]
     struct Quoting(std::io::Error);
 
@@ -521,23 +523,23 @@ mod tests {
     fn a_cause_the_message_already_quotes_is_not_repeated() {
         let e = Quoting(std::io::Error::other("no such file"));
         assert_eq!(error_chain(&e), "x.png: no such file");
-        let wrapped = Error::Write {
+        let wrapped = Error::from(RunFolderError::Write {
             path: "out.json".into(),
             source: std::io::Error::other("disk full"),
-        };
+        });
         let text = error_chain(&wrapped);
         assert_eq!(text.matches("disk full").count(), 1, "{text}");
     }
 
     #[test]
     fn a_cause_that_starts_with_the_file_just_named_names_it_once() {
-        let e = Error::WriteMesh {
+        let e = Error::from(RunFolderError::WriteMesh {
             path: "o/sequence.pc2.tmp".into(),
             source: visage_mesh::io::MeshIoError::Io {
                 path: "o/sequence.pc2.tmp".into(),
                 source: std::io::Error::other("File too large"),
             },
-        };
+        });
         assert_eq!(
             error_chain(&e),
             "cannot write o/sequence.pc2.tmp: File too large"

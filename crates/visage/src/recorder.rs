@@ -2,9 +2,10 @@
 
 use visage_camera::Intrinsics;
 
-use crate::metrics::{FrameMetrics, RunSummary, RunTiming};
+use visage_run_folder::{FrameMetrics, RunSummary, RunTiming};
+
 use crate::quality::QualityMeter;
-use crate::Surfaces;
+use crate::{Error, FrameSink, MeshFrame, Surfaces};
 
 /// Frame records in input order and the quality meter over the meshed frames.
 #[derive(Default)]
@@ -48,6 +49,26 @@ impl Recorder {
         let m = &mut self.frames[position];
         m.reprojection_px = f;
         m.reprojection_raw_px = r;
+    }
+
+    /// A meshed frame's tail: measures its final surfaces `s` (as [`Self::measure`]) and
+    /// hands them, on the mesh of `triangles` and `uvs`, to `sink`.
+    pub fn mesh(
+        &mut self,
+        position: usize,
+        k: &Intrinsics,
+        s: &Surfaces,
+        triangles: &[[u32; 3]],
+        uvs: &[[f64; 2]],
+        sink: &mut dyn FrameSink,
+    ) -> Result<(), Error> {
+        self.measure(position, k, s);
+        sink.mesh(&MeshFrame {
+            index: self.frames[position].index,
+            triangles,
+            uvs,
+            surfaces: s,
+        })
     }
 
     /// The run's totals.

@@ -1,9 +1,9 @@
 //! Where a whole-clip run's results go, frame by frame, in input order
-//! ([`crate::Reconstructor::run`]); [`crate::OutputDir`] writes them to files.
+//! ([`crate::Reconstructor::run`]); [`OutputDir`] writes them to files.
 
-use crate::animation::BlendshapeFrame;
-use crate::landmarks::LandmarksFrame;
-use crate::metrics::FrameMetrics;
+use visage_rig::BlendshapeFrame;
+use visage_run_folder::{FrameMetrics, LandmarksFrame, MeshOutput, OutputDir};
+
 use crate::{Error, Surfaces};
 
 /// A meshed frame's final surfaces.
@@ -43,6 +43,36 @@ pub trait FrameSink {
 
     /// Something the user should know about a frame (no face found, no metric fit).
     fn warning(&mut self, _message: &str) {}
+
+    /// A run into an output folder ([`crate::run_into`]) starts, to process `frames` frames
+    /// (when known).
+    fn started(&mut self, _frames: Option<usize>) {}
+
+    /// Something the user may want to know about the run that is not a problem (what a
+    /// resumed run kept).
+    fn notice(&mut self, _message: &str) {}
 }
 
 impl FrameSink for () {}
+
+/// A run's output folder as a sink: the fused surface (and the raw one, for PLYs), the
+/// landmarks records and the blendshape curves.
+impl FrameSink for OutputDir {
+    fn landmarks(&mut self, record: &LandmarksFrame) -> Result<(), Error> {
+        Ok(self.write_landmarks(record)?)
+    }
+
+    fn mesh(&mut self, frame: &MeshFrame<'_>) -> Result<(), Error> {
+        Ok(self.write_mesh(&MeshOutput {
+            index: frame.index,
+            triangles: frame.triangles,
+            uvs: frame.uvs,
+            fused: &frame.surfaces.fused,
+            raw: &frame.surfaces.raw,
+        })?)
+    }
+
+    fn blendshapes(&mut self, frame: &BlendshapeFrame) -> Result<(), Error> {
+        Ok(self.write_blendshapes(frame)?)
+    }
+}

@@ -22,15 +22,15 @@ use visage_morphable::FaceFitter;
 use visage_morphable::FaceModel;
 use visage_video::Frame;
 
-use crate::animation::{live_link_angles, BlendshapeFrame, IctToArkit, ARKIT_BLENDSHAPES};
-use crate::gaze::{eye_gaze, eye_look_weights, EyeGaze};
-use crate::landmark_smoothing::{DistanceSmoother, LandmarkSmoother};
-use crate::landmarks::{FaceRecord, LandmarksFrame};
-use crate::lid_gate::LidGate;
-use crate::metrics::{FrameMetrics, FrameQuality, FrameStatus, PoseMetrics};
-use crate::rest_pose::{lips_closed, RestPose};
-use crate::shot_cut::{face_jumped, CutDetector};
 use crate::Error;
+use visage_face::{face_jumped, CutDetector};
+use visage_face::{DistanceSmoother, LandmarkSmoother};
+use visage_rig::LidGate;
+use visage_rig::{eye_gaze, eye_look_weights, EyeGaze};
+use visage_rig::{lips_closed, RestPose};
+use visage_rig::{live_link_angles, BlendshapeFrame, IctToArkit, ARKIT_BLENDSHAPES};
+use visage_run_folder::{FaceRecord, LandmarksFrame};
+use visage_run_folder::{FrameMetrics, FrameQuality, FrameStatus, PoseMetrics};
 
 /// A face found and fitted in a frame.
 pub(crate) struct TrackedFace {

@@ -66,7 +66,7 @@ pub struct SyntheticArgs {
     pub seed: u64,
     /// The simulated tracker's landmark smoothing (as `visage run --smoothing`): the
     /// acceleration-to-noise ratio (1/s²) or `off`.
-    #[arg(long, default_value_t = SmoothingArg(Some(visage_eval::BENCHMARK_LANDMARK_SMOOTHING)))]
+    #[arg(long, default_value_t = SmoothingArg(Some(visage::DEFAULT_LANDMARK_SMOOTHING)))]
     pub smoothing: SmoothingArg,
     /// Smoothness weight λ of the image-plane fusion methods (reference pixels⁴).
     #[arg(long, default_value_t = Weights::default().lambda, allow_hyphen_values = true)]
@@ -318,18 +318,6 @@ mod tests {
             sift_random_control: false,
             sift_fairing_base_weight: visage_eval::SIFT_FAIRING_BASE_WEIGHT,
         }
-    }
-
-    #[test]
-    fn the_benchmark_smooths_landmarks_as_the_pipeline_does() {
-        assert_eq!(
-            visage_eval::BENCHMARK_LANDMARK_SMOOTHING,
-            visage::DEFAULT_LANDMARK_SMOOTHING
-        );
-        assert_eq!(
-            visage_eval::BENCHMARK_LATENCY_FRAMES,
-            visage::DEFAULT_LATENCY_FRAMES
-        );
     }
 
     #[test]

@@ -202,7 +202,7 @@ pub fn video(args: VideoArgs) -> anyhow::Result<()> {
         let svg = args.out.join(format!("{}_stability.svg", report.clip));
         let text = stability_chart_svg(&report);
         visage::write_atomically(&svg, |tmp| {
-            std::fs::write(tmp, &text).map_err(|source| Error::Write {
+            std::fs::write(tmp, &text).map_err(|source| visage::run_folder::RunFolderError::Write {
                 path: svg.clone(),
                 source,
             })

@@ -125,7 +125,7 @@ fn write_keypoints(path: &Path, rgb: &image::RgbImage, features: &Features) -> a
                 serde_json::to_writer(std::io::BufWriter::new(f), &file)
                     .map_err(std::io::Error::other)
             })
-            .map_err(|source| visage::Error::Write {
+            .map_err(|source| visage::run_folder::RunFolderError::Write {
                 path: tmp.to_owned(),
                 source,
             })
@@ -144,7 +144,7 @@ pub fn read_keypoints(path: &Path) -> anyhow::Result<Features> {
 pub fn save_png(path: &Path, rgb: &image::RgbImage) -> anyhow::Result<()> {
     visage::write_atomically(path, |tmp| {
         rgb.save_with_format(tmp, image::ImageFormat::Png)
-            .map_err(|e| visage::Error::Write {
+            .map_err(|e| visage::run_folder::RunFolderError::Write {
                 path: tmp.to_owned(),
                 source: std::io::Error::other(e),
             })

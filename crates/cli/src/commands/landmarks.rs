@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Args;
 use serde_json::json;
-use visage::{check_fov, FaceRecord, LandmarksFrame};
+use visage::check_fov;
+use visage::run_folder::{FaceRecord, LandmarksFrame};
 use visage_camera::{write_depth_png, DepthKind, Intrinsics, DEFAULT_FOV_DEG};
 use visage_face::{
     fit_face_geometry, model_files, render_faces_depth, CanonicalMesh, Face, FaceMesh, FaceTracker,

@@ -201,7 +201,7 @@ fn read_mesh_or_cache(path: &Path, frame: Option<usize>) -> anyhow::Result<TriMe
         )
     })?;
     let cache = visage_mesh::io::read_pc2(path)?;
-    let obj = path.with_file_name(visage::CACHE_MESH_FILE);
+    let obj = path.with_file_name(visage::file_names::CACHE_MESH);
     let mut mesh = visage_mesh::io::read_obj(&obj)?;
     if cache.points != mesh.vertices.len() {
         bail!(
@@ -222,7 +222,7 @@ fn read_mesh_or_cache(path: &Path, frame: Option<usize>) -> anyhow::Result<TriMe
     mesh.vertices = cache
         .sample(frame)
         .chunks_exact(3)
-        .map(|p| visage::camera_to_y_up([p[0] as f64, p[1] as f64, p[2] as f64]))
+        .map(|p| visage::run_folder::camera_to_y_up([p[0] as f64, p[1] as f64, p[2] as f64]))
         .collect();
     mesh.normals.clear();
     Ok(mesh)

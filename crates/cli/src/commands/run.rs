@@ -13,14 +13,12 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use indicatif::ProgressBar;
 use visage::{
-    BlendshapeFrame, Camera, DepthKind, DepthNetwork, DepthSequence, DepthSource, EdgeMask,
-    FaceTarget, FrameMetrics, FrameSink, Input, Intrinsics, KeptFrames, LandmarksFrame, MeshFrame,
-    MeshKind, ModelSource, NetworkConfig, OutputDir, PlyFormat, Reconstructor, Registration,
-    ResumeState, RgbdLayout, RgbdOptions, RgbdRecording, RigidTransform, RunDescription,
-    TemporalMode, DEFAULT_SUBDIVISION,
+    file_names, BlendshapeFrame, Camera, DepthKind, DepthNetwork, DepthSequence, DepthSource,
+    EdgeMask, FaceTarget, FolderOptions, FrameMetrics, FrameSink, Input, Intrinsics, KeptFrames,
+    LandmarksFrame, MeshFrame, MeshKind, ModelSource, NetworkConfig, PlyFormat, Reconstructor,
+    Registration, RgbdLayout, RgbdOptions, RgbdRecording, RigidTransform, TemporalMode,
+    DEFAULT_SUBDIVISION,
 };
-
-use std::sync::atomic::Ordering;
 
 use crate::commands::export::{exports_into, print_summary, ExportArgs};
 use crate::exit::Failure;
@@ -235,31 +233,18 @@ pub enum FacesArg {
 }
 
 /// Refuses an output folder that is not empty, or (with `--overwrite`) removes a previous
-/// run's files from it, saying what it found.
-pub fn claim_output_folder(out: &std::path::Path, overwrite: bool) -> anyhow::Result<()> {
-    let contents = visage::inspect_output_folder(out)?;
-    if contents.is_empty() {
-        return Ok(());
-    }
-    if !overwrite {
-        return Err(Failure {
-            code: crate::exit::BAD_INPUT,
-            error: anyhow::anyhow!(
-                "{}: the output folder is not empty; it holds {}. Pass --overwrite to replace \
-                 a previous run's files (other files stay), or choose another folder",
-                out.display(),
-                contents.describe()
-            ),
-        }
-        .into());
-    }
-    if contents.has_run() {
-        let removed = visage::clear_outputs(out)?;
+/// run's files from it, saying what it found; with `resume`, a run there is continued.
+pub fn claim_output_folder(
+    out: &std::path::Path,
+    overwrite: bool,
+    resume: bool,
+) -> anyhow::Result<()> {
+    if let Some(cleared) = visage::run_folder::claim(out, overwrite, resume)? {
         eprintln!(
             "--overwrite: removed {} entries of the previous run from {} (it held {})",
-            removed.len(),
+            cleared.removed.len(),
             out.display(),
-            contents.describe()
+            cleared.held
         );
     }
     Ok(())
@@ -488,12 +473,14 @@ impl PipelineArgs {
 }
 
 /// The output folder with a progress bar and warnings on the terminal.
-struct Terminal<'a, S> {
+struct Terminal<S> {
     sink: S,
-    bar: &'a ProgressBar,
+    bar: ProgressBar,
+    /// Notices are not printed, and the bar is hidden.
+    quiet: bool,
 }
 
-impl<S: FrameSink> FrameSink for Terminal<'_, S> {
+impl<S: FrameSink> FrameSink for Terminal<S> {
     fn landmarks(&mut self, record: &LandmarksFrame) -> Result<(), visage::Error> {
         self.sink.landmarks(record)
     }
@@ -509,11 +496,23 @@ impl<S: FrameSink> FrameSink for Terminal<'_, S> {
     fn warning(&mut self, message: &str) {
         self.bar.suspend(|| eprintln!("warning: {message}"));
     }
+    fn started(&mut self, frames: Option<usize>) {
+        self.bar = progress_bar(self.quiet, frames);
+    }
+    fn notice(&mut self, message: &str) {
+        if !self.quiet {
+            self.bar.suspend(|| eprintln!("{message}"));
+        }
+    }
 }
 
 /// A progress bar and warnings for a sink that keeps nothing (`visage bench`).
-pub fn terminal(bar: &ProgressBar) -> impl FrameSink + '_ {
-    Terminal { sink: (), bar }
+pub fn terminal(bar: &ProgressBar) -> impl FrameSink {
+    Terminal {
+        sink: (),
+        bar: bar.clone(),
+        quiet: false,
+    }
 }
 
 /// Runs `visage run`.
@@ -530,9 +529,7 @@ pub fn run_with_stop(
     std::fs::metadata(p.input_path())
         .with_context(|| format!("{}: cannot read the input", p.input_path().display()))?;
     // With --resume, a previous run is continued rather than refused.
-    if !args.resume || !visage::inspect_output_folder(&args.out)?.has_run() {
-        claim_output_folder(&args.out, args.overwrite)?;
-    }
+    claim_output_folder(&args.out, args.overwrite, args.resume)?;
     // Ctrl-C ends the input: the frames read so far go through and are written.
     if args.faces == FacesArg::Largest {
         return run_face(&args, &args.out, FaceTarget::Largest, stop).map(|_| ());
@@ -559,7 +556,7 @@ pub fn run_with_stop(
     let mut records = Vec::new();
     let mut first_error = None;
     for (id, (frame, bbox)) in (1..).zip(&faces) {
-        let folder = format!("{}{id}", visage::FACE_FOLDER_PREFIX);
+        let folder = format!("{}{id}", file_names::FACE_FOLDER_PREFIX);
         let dir = args.out.join(&folder);
         let result = run_face(&args, &dir, FaceTarget::Near(*bbox), stop);
         let (status, meshed) = match &result {
@@ -585,7 +582,7 @@ pub fn run_with_stop(
         }
     }
     visage::write_json_atomically(
-        &args.out.join("faces.json"),
+        &args.out.join(file_names::FACES),
         &serde_json::json!({ "input": p.input_path().display().to_string(), "faces": records }),
     )?;
     first_error.map_or(Ok(()), Err)
@@ -626,155 +623,73 @@ fn run_face(
     stop: &std::sync::Arc<std::sync::atomic::AtomicBool>,
 ) -> anyhow::Result<usize> {
     let p = &args.pipeline;
-    let (mut input, reconstructor) = p.open_for(target)?;
-    let input_name = p.input_path().display().to_string();
-    let selection = input.selection();
-    let description = RunDescription {
-        input: &input_name,
-        intrinsics: reconstructor.intrinsics(),
-        parameters: reconstructor.parameters(),
-        selection,
-    };
-    let resume = match args.resume {
-        true => visage::prepare_resume(dir, &description)?,
-        false => ResumeState::Fresh,
-    };
-    let point = match resume {
-        ResumeState::Fresh => None,
-        ResumeState::Complete { frames } => {
-            if !p.quiet {
-                eprintln!(
-                    "{}: the run there is complete ({frames} frames); nothing to resume",
-                    dir.display()
-                );
-            }
-            return Ok(meshed_in(dir));
-        }
-        ResumeState::Continue(point) => {
-            if !p.quiet {
-                eprintln!(
-                    "--resume: {} frames of the previous run (status \"{}\") kept in {}; \
-                     continuing after frame {} (warmed up on the {} frames before it){}",
-                    point.frames,
-                    point.previous_status,
-                    dir.display(),
-                    point.after_frame,
-                    point.warm_up_frames,
-                    match point.redone {
-                        0 => String::new(),
-                        1 => " (its last frame done again)".to_owned(),
-                        n => format!(" (its last {n} frames done again)"),
-                    }
-                );
-            }
-            if let Some(index) = point.warm_up_after {
-                input = input.after(index);
-            }
-            Some(point)
-        }
-    };
+    let (input, reconstructor) = p.open_for(target)?;
     // The frames the texture is fused from, kept as they are decoded (no second decode).
     let kept = KeptFrames::default();
-    if args.exports.any() {
-        let select = visage_export::texture_frames(input.frame_rate());
-        input = input.keep_copies(select, kept.clone());
-    }
+    let keep = args.exports.any().then(|| {
+        let select: visage::FrameFilter =
+            Box::new(visage_export::texture_frames(input.frame_rate()));
+        (select, kept.clone())
+    });
     let format = if args.ascii {
         PlyFormat::Ascii
     } else {
         PlyFormat::BinaryLittleEndian
     };
-    let mut out = OutputDir::create(dir)?;
-    if let Some(point) = &point {
-        out = out.resuming(point.clone());
-    }
-    out = out
-        .with_ply(format, args.ply, args.save_raw)?
-        .with_point_cache()?
-        .with_landmarks()?;
-    if !p.no_fit {
-        out = out.with_blendshapes(input.frame_rate())?;
-    }
-    // The camera the meshes are in: `visage render MESH --intrinsics OUT/camera.json`.
-    out.write_camera(reconstructor.intrinsics())?;
-    out.write_running(&description)?;
-    let bar = p.progress(&input);
-    let input = input.stop_on(stop.clone());
-    let mut sink = Terminal {
-        sink: out,
-        bar: &bar,
+    let options = FolderOptions {
+        input_name: p.input_path().display().to_string(),
+        resume: args.resume,
+        ply: (format, args.ply, args.save_raw),
+        blendshapes: !p.no_fit,
+        keep,
+        stop: Some(stop.clone()),
+        target,
     };
-    let mut outcome = reconstructor.run(input, &mut sink);
-    if stop.load(Ordering::SeqCst) && outcome.error.is_none() {
-        outcome.error = Some(visage::Error::Interrupted);
-    }
-    let s = &outcome.summary;
-    if let (FaceTarget::Largest, true, Some(frame)) =
-        (target, s.most_faces_seen > 1, s.most_faces_frame)
-    {
-        eprintln!(
-            "warning: {} faces were in view (first in frame {frame}); only the largest was \
-             meshed (--faces all meshes each)",
-            s.most_faces_seen
-        );
-    }
-    if outcome.error.is_none() && s.frames > 0 && s.solved + s.carried == 0 {
-        outcome.error = Some(visage::Error::NoFace { frames: s.frames });
-    }
-    bar.finish_and_clear();
-    let mut out = sink.sink;
-    if let (Err(e), None) = (out.finish(), &outcome.error) {
-        outcome.error = Some(e);
-    }
-    if let Some(identity) = &outcome.identity {
-        // A failure here still leaves a metrics.json that says so.
-        if let (Err(e), None) = (out.write_identity(identity), &outcome.error) {
-            outcome.error = Some(e);
+    let mut progress = Terminal {
+        sink: (),
+        bar: ProgressBar::hidden(),
+        quiet: p.quiet,
+    };
+    let run = visage::run_into(input, reconstructor, dir, options, &mut progress);
+    progress.bar.finish_and_clear();
+    let run = run?;
+    let Some(s) = &run.summary else {
+        return Ok(run.meshed);
+    };
+    match run.error {
+        Some(visage::Error::Interrupted) => {
+            return Err(Failure {
+                code: interrupt::INTERRUPTED,
+                error: anyhow::anyhow!(
+                    "interrupted after {} frames: their meshes, landmarks.json and metrics.json \
+                     (status \"interrupted\") are in {}; the same command with --resume goes \
+                     on from there, `visage export {}` makes the other files",
+                    run.frames,
+                    dir.display(),
+                    dir.display()
+                ),
+            }
+            .into())
         }
-    }
-    let mut report = outcome.report(&input_name);
-    report.selection = Some(selection);
-    // The warm-up frames' records are the previous run's.
-    let mut earlier_meshed = 0;
-    if let Some(point) = &point {
-        let warm_up = |f: &FrameMetrics| f.index <= point.after_frame;
-        let warm_meshed = report.frames.iter().filter(|f| warm_up(f) && f.has_mesh());
-        earlier_meshed = point.meshed.saturating_sub(warm_meshed.count());
-        report.frames.retain(|f| !warm_up(f));
-    }
-    report.resumed = point.clone();
-    out.write_metrics(&report)?;
-    if let Some(visage::Error::Interrupted) = outcome.error {
-        return Err(Failure {
-            code: interrupt::INTERRUPTED,
-            error: anyhow::anyhow!(
-                "interrupted after {} frames: their meshes, landmarks.json and metrics.json \
-                 (status \"interrupted\") are in {}; the same command with --resume goes \
-                 on from there, `visage export {}` makes the other files",
-                outcome.frames.len(),
-                dir.display(),
+        Some(e @ visage::Error::NoFace { .. }) => {
+            return Err(Failure {
+                code: crate::exit::NO_FACE,
+                error: anyhow::Error::new(e).context(format!(
+                    "{}: nothing to mesh (metrics.json is in {})",
+                    p.input_path().display(),
+                    dir.display()
+                )),
+            }
+            .into())
+        }
+        Some(e) => {
+            return Err(anyhow::Error::new(e).context(format!(
+                "stopped after {} frames (meshes so far and metrics.json are in {})",
+                run.frames,
                 dir.display()
-            ),
+            )))
         }
-        .into());
-    }
-    if let Some(e @ visage::Error::NoFace { .. }) = outcome.error {
-        return Err(Failure {
-            code: crate::exit::NO_FACE,
-            error: anyhow::Error::new(e).context(format!(
-                "{}: nothing to mesh (metrics.json is in {})",
-                p.input_path().display(),
-                dir.display()
-            )),
-        }
-        .into());
-    }
-    if let Some(e) = outcome.error {
-        return Err(anyhow::Error::new(e).context(format!(
-            "stopped after {} frames (meshes so far and metrics.json are in {})",
-            outcome.frames.len(),
-            dir.display()
-        )));
+        None => {}
     }
     if args.exports.any() {
         let summary = exports_into(dir, &args.exports, Some(&kept.take()))?;
@@ -783,8 +698,7 @@ fn run_face(
         }
     }
     if !p.quiet {
-        let s = &outcome.summary;
-        if let Some(point) = &point {
+        if let Some(point) = &run.resumed {
             eprint!(
                 "resumed after frame {} ({} frames kept): ",
                 point.after_frame, point.frames
@@ -804,16 +718,5 @@ fn run_face(
             s.quality.image_jitter_reduction.unwrap_or(0.0),
         );
     }
-    Ok(earlier_meshed + outcome.summary.solved + outcome.summary.carried)
-}
-
-/// The frames a complete run in `dir` meshed, as its `metrics.json` says (0 when it does not).
-fn meshed_in(dir: &std::path::Path) -> usize {
-    let metrics = std::fs::read(dir.join("metrics.json"))
-        .ok()
-        .and_then(|bytes| serde_json::from_slice::<serde_json::Value>(&bytes).ok())
-        .unwrap_or_default();
-    let count = |key: &str| metrics["summary"][key].as_u64().unwrap_or(0) as usize;
-    let earlier = metrics["resumed"]["meshed"].as_u64().unwrap_or(0) as usize;
-    earlier + count("solved") + count("carried")
+    Ok(run.meshed)
 }

@@ -314,7 +314,7 @@ fn frames_in(dir: &Path) -> (u64, u64) {
         for e in entries.flatten() {
             if e.file_name()
                 .to_string_lossy()
-                .starts_with(visage::FACE_FOLDER_PREFIX)
+                .starts_with(visage::file_names::FACE_FOLDER_PREFIX)
             {
                 let (f, m) = read(&e.path());
                 frames = frames.max(f);

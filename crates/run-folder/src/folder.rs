@@ -7,33 +7,8 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::Error;
-
-/// The files a run and `visage export` write at the top of an output folder.
-pub const OUTPUT_FILES: [&str; 16] = [
-    crate::output::POINT_CACHE_FILE,
-    crate::output::CACHE_MESH_FILE,
-    crate::output::CACHE_MATERIAL_FILE,
-    "landmarks.json",
-    "metrics.json",
-    "camera.json",
-    crate::animation::BLENDSHAPES_CSV,
-    crate::animation::BLENDSHAPES_JSON,
-    "identity.obj",
-    "identity.json",
-    "texture.png",
-    "sequence.glb",
-    "report.html",
-    "preview.mp4",
-    "export.json",
-    "faces.json",
-];
-
-/// The folders a run and `visage export` write in an output folder.
-pub const OUTPUT_FOLDERS: [&str; 4] = ["meshes", "raw", "plots", "frames"];
-
-/// The prefix of the per-face subfolders of a run over every face (`face-1`, `face-2`, …).
-pub const FACE_FOLDER_PREFIX: &str = "face-";
+use crate::file_names::{self, FACE_FOLDER_PREFIX, OUTPUT_FILES, OUTPUT_FOLDERS};
+use crate::RunFolderError as Error;
 
 /// What an output folder holds before a run.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -141,7 +116,7 @@ pub fn inspect(dir: &Path) -> Result<FolderContents, Error> {
             contents.outputs.push(format!("{name}/"));
         } else if !is_dir && is_output_file(&name) {
             contents.outputs.push(name);
-        } else if !is_dir && name.ends_with(".tmp") {
+        } else if !is_dir && name.ends_with(file_names::TMP_SUFFIX) {
             contents.temporaries.push(name);
         } else {
             contents
@@ -156,13 +131,49 @@ pub fn inspect(dir: &Path) -> Result<FolderContents, Error> {
     ] {
         names.sort();
     }
-    if let Ok(text) = std::fs::read_to_string(dir.join("metrics.json")) {
+    if let Ok(text) = std::fs::read_to_string(dir.join(file_names::METRICS)) {
         if let Ok(value) = serde_json::from_str::<serde_json::Value>(&text) {
             contents.status = value["status"].as_str().map(str::to_owned);
             contents.frames = value["frames"].as_array().map(Vec::len);
         }
     }
     Ok(contents)
+}
+
+/// What [`claim`] removed from a folder that held a previous run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cleared {
+    /// The entries removed.
+    pub removed: Vec<PathBuf>,
+    /// What the folder held ([`FolderContents::describe`]).
+    pub held: String,
+}
+
+/// Makes `dir` ready for a run, one run per folder: a missing or empty folder is taken as it
+/// is, and so is one that holds a run when `resume` (it is continued); any other folder that
+/// holds anything is refused, unless `overwrite`, which removes a previous run's files (the
+/// user's stay) and says what it removed.
+///
+/// # Errors
+/// [`Error::NotEmpty`] naming what the folder holds; a file that cannot be read or removed.
+pub fn claim(dir: &Path, overwrite: bool, resume: bool) -> Result<Option<Cleared>, Error> {
+    let contents = inspect(dir)?;
+    if contents.is_empty() || (resume && contents.has_run()) {
+        return Ok(None);
+    }
+    if !overwrite {
+        return Err(Error::NotEmpty {
+            dir: dir.to_owned(),
+            holds: contents.describe(),
+        });
+    }
+    if !contents.has_run() {
+        return Ok(None);
+    }
+    Ok(Some(Cleared {
+        removed: clear_outputs(dir)?,
+        held: contents.describe(),
+    }))
 }
 
 /// Removes visage's outputs and temporary files from `dir` (as [`inspect`] finds them) and

@@ -10,7 +10,7 @@
 use std::io::Read;
 use std::path::Path;
 
-use crate::Error;
+use crate::RunFolderError as Error;
 
 /// What [`scan_frames`] found.
 #[derive(Clone, Debug, PartialEq)]

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::Error;
+use crate::RunFolderError as Error;
 
 /// Calls `write` on a temporary sibling of `path` (`<name>.tmp`) and renames it to `path` once
 /// `write` succeeded; on failure the temporary file is removed.
@@ -22,9 +22,9 @@ pub fn write_atomically(
 }
 
 /// `path` with `.tmp` appended to its file name.
-pub(crate) fn tmp_path(path: &Path) -> PathBuf {
+pub fn tmp_path(path: &Path) -> PathBuf {
     let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(".tmp");
+    name.push(crate::file_names::TMP_SUFFIX);
     path.with_file_name(name)
 }
 

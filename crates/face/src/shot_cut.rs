@@ -22,7 +22,7 @@ pub const CUT_FACE_JUMP: f64 = 0.25;
 
 /// Watches consecutive frames for cuts.
 #[derive(Default)]
-pub(crate) struct CutDetector {
+pub struct CutDetector {
     previous: Option<Vec<f32>>,
     scratch: Vec<f32>,
 }
@@ -49,7 +49,7 @@ impl CutDetector {
 }
 
 /// Whether the face jumped between two frames' landmarks (pixels).
-pub(crate) fn face_jumped(previous: &[[f64; 2]], current: &[[f64; 2]]) -> bool {
+pub fn face_jumped(previous: &[[f64; 2]], current: &[[f64; 2]]) -> bool {
     if previous.len() != current.len() || current.is_empty() {
         return false;
     }

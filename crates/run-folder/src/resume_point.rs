@@ -5,19 +5,46 @@
 use serde::Serialize;
 use visage_camera::Intrinsics;
 
-use crate::config::Parameters;
-use crate::input::FrameSelection;
+/// Which of an input's frames a run processes: every `every`-th, at most `max_frames` of them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct FrameSelection {
+    pub every: usize,
+    pub max_frames: Option<usize>,
+}
+
+/// A run's parameters as `metrics.json` records them (the pipeline's own type): a resumed run
+/// must have the same.
+pub trait RunParameters: Serialize {
+    /// Why a run with these parameters cannot be continued part-way (and what to do instead),
+    /// or `None` when it can.
+    fn cannot_resume(&self) -> Option<&'static str>;
+
+    /// Frames the landmark smoother waits for before giving a frame out: a run's last ones
+    /// went out without that look-ahead.
+    fn latency_frames(&self) -> usize;
+
+    /// Whether the model is fitted (and so the blendshape curves written).
+    fn fits_model(&self) -> bool;
+}
 
 /// What defines a run: a folder's files are continued only by the same one. Written into
 /// `metrics.json` when the run starts ([`crate::OutputDir::write_running`]).
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct RunDescription<'a> {
+#[derive(Debug, Serialize)]
+pub struct RunDescription<'a, P> {
     /// The input as given on the command line.
     pub input: &'a str,
     pub intrinsics: &'a Intrinsics,
-    pub parameters: &'a Parameters,
+    pub parameters: &'a P,
     pub selection: FrameSelection,
 }
+
+impl<P> Clone for RunDescription<'_, P> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<P> Copy for RunDescription<'_, P> {}
 
 /// Kept frames a resumed run processes again to warm its temporal state up (10 s at 30 fps,
 /// ~3 s of work). The frame-to-frame state (the landmark smoother, the fusion's previous

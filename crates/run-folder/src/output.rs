@@ -16,13 +16,15 @@ use visage_mesh::io::{
 };
 use visage_mesh::TriMesh;
 
-use crate::animation::{BlendshapeFrame, BlendshapesJsonWriter, LiveLinkCsvWriter};
+use visage_rig::BlendshapeFrame;
+
 use crate::atomic_write::{tmp_path, write_atomically, write_json_atomically};
+use crate::blendshapes_json::BlendshapesJsonWriter;
+use crate::file_names;
 use crate::landmarks::LandmarksFrame;
-use crate::reconstructor::Identity;
-use crate::resume_point::{ResumePoint, RunDescription};
-use crate::sink::{FrameSink, MeshFrame};
-use crate::Error;
+use crate::live_link_csv::LiveLinkCsvWriter;
+use crate::resume_point::{ResumePoint, RunDescription, RunParameters};
+use crate::RunFolderError as Error;
 
 /// An output folder being written.
 pub struct OutputDir {
@@ -55,12 +57,6 @@ enum PointCacheState {
     },
 }
 
-/// The point cache's file name in an output folder.
-pub const POINT_CACHE_FILE: &str = "sequence.pc2";
-/// The point cache's mesh (topology, UVs, the first frame's surface).
-pub const CACHE_MESH_FILE: &str = "mesh.obj";
-/// The material library `mesh.obj` names.
-pub const CACHE_MATERIAL_FILE: &str = "mesh.mtl";
 /// The material's name in it.
 pub const CACHE_MATERIAL: &str = "face";
 
@@ -116,7 +112,10 @@ impl OutputDir {
         fused: bool,
         raw: bool,
     ) -> Result<OutputDir, Error> {
-        for (sub, wanted) in [("meshes", fused), ("raw", raw)] {
+        for (sub, wanted) in [
+            (file_names::MESHES_FOLDER, fused),
+            (file_names::RAW_FOLDER, raw),
+        ] {
             if wanted {
                 let path = self.dir.join(sub);
                 std::fs::create_dir_all(&path).map_err(|source| Error::Write { path, source })?;
@@ -138,7 +137,7 @@ impl OutputDir {
     pub fn with_point_cache(mut self) -> Result<OutputDir, Error> {
         self.cache = match &self.resume {
             Some(point) if !point.cache_indices.is_empty() => {
-                let tmp = tmp_path(&self.dir.join(POINT_CACHE_FILE));
+                let tmp = tmp_path(&self.dir.join(file_names::POINT_CACHE));
                 let samples = u32::try_from(point.cache_indices.len()).unwrap_or(u32::MAX);
                 let writer =
                     Pc2Writer::append(&tmp, samples).map_err(|source| Error::WriteMesh {
@@ -160,7 +159,7 @@ impl OutputDir {
     /// # Errors
     /// When the file cannot be created.
     pub fn with_landmarks(mut self) -> Result<OutputDir, Error> {
-        let tmp = tmp_path(&self.dir.join("landmarks.json"));
+        let tmp = tmp_path(&self.dir.join(file_names::LANDMARKS));
         let write_error = |source| Error::Write {
             path: tmp.clone(),
             source,
@@ -206,20 +205,24 @@ impl OutputDir {
     ///
     /// # Errors
     /// When a file cannot be written.
-    pub fn write_identity(&self, identity: &Identity) -> Result<(), Error> {
-        let path = self.dir.join("identity.obj");
-        let mesh = identity.neutral_mesh();
+    pub fn write_identity(
+        &self,
+        neutral: &TriMesh,
+        coefficients: &[f64],
+        frames: usize,
+    ) -> Result<(), Error> {
+        let path = self.dir.join(file_names::IDENTITY_MESH);
         write_atomically(&path, |p| {
-            write_obj(p, &mesh).map_err(|source| Error::WriteMesh {
+            write_obj(p, neutral).map_err(|source| Error::WriteMesh {
                 path: p.to_owned(),
                 source,
             })
         })?;
         write_json_atomically(
-            &self.dir.join("identity.json"),
+            &self.dir.join(file_names::IDENTITY),
             &serde_json::json!({
-                "coefficients": identity.coefficients,
-                "frames": identity.frames,
+                "coefficients": coefficients,
+                "frames": frames,
                 "units": "weights of the model's identity modes, each ~ N(0, 1)",
             }),
         )
@@ -231,13 +234,16 @@ impl OutputDir {
 
     /// Writes `camera.json`: the intrinsics the meshes are in.
     pub fn write_camera(&self, k: &Intrinsics) -> Result<(), Error> {
-        write_json_atomically(&self.dir.join("camera.json"), k)
+        write_json_atomically(&self.dir.join(file_names::CAMERA), k)
     }
 
     /// Writes the `metrics.json` of a run that has started: `"status": "running"`, the input,
     /// the camera, the parameters and the frame selection, and where a resumed run continues
     /// (the final one replaces it).
-    pub fn write_running(&self, run: &RunDescription<'_>) -> Result<(), Error> {
+    pub fn write_running<P: RunParameters>(
+        &self,
+        run: &RunDescription<'_, P>,
+    ) -> Result<(), Error> {
         let mut metrics = serde_json::json!({ "status": crate::RunStatus::Running });
         if let (Some(m), Ok(serde_json::Value::Object(run))) =
             (metrics.as_object_mut(), serde_json::to_value(run))
@@ -252,7 +258,7 @@ impl OutputDir {
 
     /// Writes `metrics.json`.
     pub fn write_metrics(&self, report: &impl serde::Serialize) -> Result<(), Error> {
-        write_json_atomically(&self.dir.join("metrics.json"), report)
+        write_json_atomically(&self.dir.join(file_names::METRICS), report)
     }
 
     /// Closes `landmarks.json` and the blendshape files (also after a failed run: they then
@@ -275,7 +281,7 @@ impl OutputDir {
         let Some((mut w, _)) = self.landmarks.take() else {
             return Ok(());
         };
-        let path = self.dir.join("landmarks.json");
+        let path = self.dir.join(file_names::LANDMARKS);
         let tmp = tmp_path(&path);
         w.write_all(b"]}\n")
             .and_then(|()| w.flush())
@@ -293,7 +299,7 @@ impl OutputDir {
     fn flush_streams(&mut self) -> Result<(), Error> {
         if let Some((w, _)) = &mut self.landmarks {
             w.flush().map_err(|source| Error::Write {
-                path: tmp_path(&self.dir.join("landmarks.json")),
+                path: tmp_path(&self.dir.join(file_names::LANDMARKS)),
                 source,
             })?;
         }
@@ -303,7 +309,7 @@ impl OutputDir {
         }
         if let PointCacheState::Writing { writer, .. } = &mut self.cache {
             writer.flush().map_err(|source| Error::WriteMesh {
-                path: tmp_path(&self.dir.join(POINT_CACHE_FILE)),
+                path: tmp_path(&self.dir.join(file_names::POINT_CACHE)),
                 source,
             })?;
         }
@@ -319,16 +325,16 @@ impl OutputDir {
         let mut mesh = self.mesh.clone();
         mesh.vertices = vertices.iter().map(|&p| camera_to_y_up(p)).collect();
         let material = ObjMaterial {
-            library: CACHE_MATERIAL_FILE,
+            library: file_names::CACHE_MATERIAL_FILE,
             name: CACHE_MATERIAL,
         };
-        write_atomically(&self.dir.join(CACHE_MESH_FILE), |p| {
+        write_atomically(&self.dir.join(file_names::CACHE_MESH), |p| {
             write_obj_with(p, &mesh, Some(material)).map_err(mesh_error(p))
         })?;
-        write_atomically(&self.dir.join(CACHE_MATERIAL_FILE), |p| {
+        write_atomically(&self.dir.join(file_names::CACHE_MATERIAL_FILE), |p| {
             write_mtl(p, CACHE_MATERIAL, None).map_err(mesh_error(p))
         })?;
-        let tmp = tmp_path(&self.dir.join(POINT_CACHE_FILE));
+        let tmp = tmp_path(&self.dir.join(file_names::POINT_CACHE));
         let writer = Pc2Writer::create(&tmp, vertices.len(), 0.0).map_err(mesh_error(&tmp))?;
         self.cache = PointCacheState::Writing {
             writer,
@@ -345,7 +351,7 @@ impl OutputDir {
         else {
             return Ok(());
         };
-        let path = self.dir.join(POINT_CACHE_FILE);
+        let path = self.dir.join(file_names::POINT_CACHE);
         let tmp = tmp_path(&path);
         let mesh_error = |source: MeshIoError| Error::WriteMesh {
             path: tmp.clone(),
@@ -380,8 +386,26 @@ impl OutputDir {
     }
 }
 
-impl FrameSink for OutputDir {
-    fn landmarks(&mut self, record: &LandmarksFrame) -> Result<(), Error> {
+/// A meshed frame's surfaces, as [`OutputDir::write_mesh`] stores them.
+#[derive(Clone, Copy, Debug)]
+pub struct MeshOutput<'a> {
+    /// Frame index in the input.
+    pub index: usize,
+    /// The mesh's triangles (fixed for the run).
+    pub triangles: &'a [[u32; 3]],
+    /// Texture coordinates per vertex (empty: the mesh has none).
+    pub uvs: &'a [[f64; 2]],
+    /// The fused surface (camera coordinates, metres).
+    pub fused: &'a [[f64; 3]],
+    /// The raw (unfused) surface on the same mesh.
+    pub raw: &'a [[f64; 3]],
+}
+
+/// The streams, frame by frame, in input order. Frames up to a resumed run's resume point
+/// (its warm-up) are skipped.
+impl OutputDir {
+    /// Appends a frame's landmarks record, after flushing every other stream.
+    pub fn write_landmarks(&mut self, record: &LandmarksFrame) -> Result<(), Error> {
         if self.written_before(record.index) {
             return Ok(());
         }
@@ -393,7 +417,7 @@ impl FrameSink for OutputDir {
         let Some((w, started)) = &mut self.landmarks else {
             return Ok(());
         };
-        let path = tmp_path(&self.dir.join("landmarks.json"));
+        let path = tmp_path(&self.dir.join(file_names::LANDMARKS));
         let write_error = |source| Error::Write {
             path: path.clone(),
             source,
@@ -405,7 +429,8 @@ impl FrameSink for OutputDir {
         serde_json::to_writer(&mut *w, record).map_err(|e| write_error(e.into()))
     }
 
-    fn blendshapes(&mut self, frame: &BlendshapeFrame) -> Result<(), Error> {
+    /// Appends a frame's blendshapes to the CSV and the JSON.
+    pub fn write_blendshapes(&mut self, frame: &BlendshapeFrame) -> Result<(), Error> {
         if self.written_before(frame.index) {
             return Ok(());
         }
@@ -416,12 +441,12 @@ impl FrameSink for OutputDir {
         Ok(())
     }
 
-    fn mesh(&mut self, frame: &MeshFrame<'_>) -> Result<(), Error> {
+    /// Appends a meshed frame's fused surface to the point cache and writes its PLYs.
+    pub fn write_mesh(&mut self, frame: &MeshOutput<'_>) -> Result<(), Error> {
         if self.written_before(frame.index) {
             return Ok(());
         }
         let name = format!("{:06}.ply", frame.index);
-        let s = frame.surfaces;
         if self.mesh.triangles != frame.triangles {
             self.mesh.triangles = frame.triangles.to_vec();
         }
@@ -429,13 +454,14 @@ impl FrameSink for OutputDir {
             self.mesh.uvs = frame.uvs.to_vec();
         }
         if matches!(self.cache, PointCacheState::Pending) {
-            self.start_point_cache(&s.fused)?;
+            self.start_point_cache(frame.fused)?;
         }
         if let PointCacheState::Writing { writer, meshed } = &mut self.cache {
             self.y_up.clear();
-            self.y_up.extend(s.fused.iter().map(|&p| camera_to_y_up(p)));
+            self.y_up
+                .extend(frame.fused.iter().map(|&p| camera_to_y_up(p)));
             writer.push(&self.y_up).map_err(|source| Error::WriteMesh {
-                path: tmp_path(&self.dir.join(POINT_CACHE_FILE)),
+                path: tmp_path(&self.dir.join(file_names::POINT_CACHE)),
                 source,
             })?;
             meshed.push(frame.index);
@@ -443,7 +469,10 @@ impl FrameSink for OutputDir {
         let Some((format, fused, raw)) = self.ply else {
             return Ok(());
         };
-        for (sub, vertices, wanted) in [("meshes", &s.fused, fused), ("raw", &s.raw, raw)] {
+        for (sub, vertices, wanted) in [
+            (file_names::MESHES_FOLDER, frame.fused, fused),
+            (file_names::RAW_FOLDER, frame.raw, raw),
+        ] {
             if !wanted {
                 continue;
             }

@@ -7,8 +7,6 @@ use serde::Serialize;
 use visage_camera::{Intrinsics, RigidTransform};
 use visage_fem::{ClipReport, SurfaceQuality};
 
-use crate::quality::QualitySummary;
-
 /// Outcome of one frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -211,7 +209,7 @@ pub struct DepthAlignmentMetrics {
 }
 
 impl DepthAlignmentMetrics {
-    pub(crate) fn aligned(fit: &visage_depth::Alignment) -> Self {
+    pub fn aligned(fit: &visage_depth::Alignment) -> Self {
         DepthAlignmentMetrics {
             samples: fit.samples,
             inliers: fit.inliers,
@@ -222,7 +220,7 @@ impl DepthAlignmentMetrics {
         }
     }
 
-    pub(crate) fn failed(failure: &visage_depth::AlignmentFailure) -> Self {
+    pub fn failed(failure: &visage_depth::AlignmentFailure) -> Self {
         let (samples, inliers) = match failure {
             visage_depth::AlignmentFailure::TooFewSamples { found, .. } => (*found, 0),
             visage_depth::AlignmentFailure::NoConsensus { inliers, samples } => {
@@ -350,7 +348,7 @@ pub struct KeypointMotionMetrics {
     pub keypoints: usize,
     /// Of those, matched with the previous frame's (ratio test, mutual).
     pub matches: usize,
-    /// Matches the RANSAC motion explains within [`crate::INLIER_THRESHOLD_M`] (0: no
+    /// Matches the RANSAC motion explains within the inlier threshold (0: no
     /// estimate).
     pub inliers: usize,
     /// The keypoints' rotation since the previous frame, degrees (`None`: no estimate).
@@ -609,17 +607,50 @@ pub struct Report<P: Serialize> {
     pub parameters: P,
     /// Which input frames the run processes (set by the caller that chose them).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub selection: Option<crate::input::FrameSelection>,
+    pub selection: Option<crate::FrameSelection>,
     /// A resumed run: where it continued, and what the files kept from before. `frames`
     /// lists the frames after the resume point; the summary covers every frame this run
     /// processed, its warm-up included.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub resumed: Option<crate::resume_point::ResumePoint>,
+    pub resumed: Option<crate::ResumePoint>,
     pub mesh: MeshSummary,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub solver: Option<SolverSummary>,
     pub summary: RunSummary,
     pub frames: Vec<FrameMetrics>,
+}
+
+/// A figure for the fused surface and the raw one.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FusedAndRaw {
+    pub fused: Option<f64>,
+    pub raw: Option<f64>,
+}
+
+/// The quality figures of a run.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct QualitySummary {
+    /// Mean over consecutive meshed frames of the RMS vertex motion after the best rigid
+    /// alignment (mm), over all mesh vertices. Image mesh: vertices are fixed pixels, not
+    /// fixed points of the face, so compare the designs on `landmark_jitter_mm`.
+    pub vertex_jitter_mm: FusedAndRaw,
+    /// The same on the surface at the 468 landmarks (image mesh: interpolated at the landmark
+    /// pixels; landmarks outside the mesh are left out of the pair). None without landmarks
+    /// (a depth folder).
+    pub landmark_jitter_mm: FusedAndRaw,
+    /// Mean over meshed frames of the mean landmark reprojection error (px).
+    pub reprojection_px: FusedAndRaw,
+    /// RMS over frames and landmarks of the second difference ‖p(t+1) − 2p(t) + p(t−1)‖ (px)
+    /// of the fused landmarks projected into the image (`fused`) and of the tracked ones
+    /// (`raw`), over runs of consecutive meshed frames.
+    pub image_jitter_px: FusedAndRaw,
+    /// `raw / fused` image jitter: how much steadier than tracked.
+    pub image_jitter_reduction: Option<f64>,
+    /// Consecutive frame pairs measured.
+    pub pairs: usize,
+    /// `raw / fused` vertex and landmark jitter.
+    pub vertex_jitter_reduction: Option<f64>,
+    pub landmark_jitter_reduction: Option<f64>,
 }
 
 #[cfg(test)]

@@ -19,16 +19,13 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
-use visage_fusion::MeshKind;
 
-use crate::animation::{BLENDSHAPES_CSV, BLENDSHAPES_JSON};
 use crate::atomic_write::tmp_path;
-use crate::config::TemporalMode;
+use crate::file_names::{self, OUTPUT_FILES, OUTPUT_FOLDERS};
+use crate::folder::{clear_outputs, inspect};
 use crate::json_records::scan_frames;
-use crate::output::{CACHE_MATERIAL_FILE, CACHE_MESH_FILE, POINT_CACHE_FILE};
-use crate::resume_point::{ResumePoint, RunDescription, WARM_UP_FRAMES};
-use crate::run_folder::{clear_outputs, inspect, OUTPUT_FILES, OUTPUT_FOLDERS};
-use crate::Error;
+use crate::resume_point::{ResumePoint, RunDescription, RunParameters, WARM_UP_FRAMES};
+use crate::RunFolderError as Error;
 
 /// What [`prepare_resume`] found.
 #[derive(Clone, Debug, PartialEq)]
@@ -50,15 +47,15 @@ pub enum ResumeState {
 /// from the whole sequence, and is removed at the resume point so that none describes only the
 /// earlier frames.
 const CONTINUED: [&str; 11] = [
-    POINT_CACHE_FILE,
-    CACHE_MESH_FILE,
-    CACHE_MATERIAL_FILE,
-    "landmarks.json",
-    "metrics.json",
-    "camera.json",
-    BLENDSHAPES_CSV,
-    BLENDSHAPES_JSON,
-    "faces.json",
+    file_names::POINT_CACHE,
+    file_names::CACHE_MESH,
+    file_names::CACHE_MATERIAL_FILE,
+    file_names::LANDMARKS,
+    file_names::METRICS,
+    file_names::CAMERA,
+    file_names::BLENDSHAPES_CSV,
+    file_names::BLENDSHAPES_JSON,
+    file_names::FACES,
     "meshes",
     "raw",
 ];
@@ -71,7 +68,10 @@ const CONTINUED: [&str; 11] = [
 /// # Errors
 /// [`Error::Resume`] when the previous run is of another input, camera, parameters or frame
 /// selection, was a clip-mode or image-mesh run, or its files disagree; file errors.
-pub fn prepare_resume(dir: &Path, run: &RunDescription<'_>) -> Result<ResumeState, Error> {
+pub fn prepare_resume<P: RunParameters>(
+    dir: &Path,
+    run: &RunDescription<'_, P>,
+) -> Result<ResumeState, Error> {
     let refuse = |reason: String| Error::Resume {
         dir: dir.to_owned(),
         reason,
@@ -79,7 +79,7 @@ pub fn prepare_resume(dir: &Path, run: &RunDescription<'_>) -> Result<ResumeStat
     if !inspect(dir)?.has_run() {
         return Ok(ResumeState::Fresh);
     }
-    let metrics_path = dir.join("metrics.json");
+    let metrics_path = dir.join(file_names::METRICS);
     let metrics: serde_json::Value = match std::fs::read(&metrics_path) {
         Ok(bytes) => serde_json::from_slice(&bytes).map_err(|e| {
             refuse(format!(
@@ -122,19 +122,8 @@ pub fn prepare_resume(dir: &Path, run: &RunDescription<'_>) -> Result<ResumeStat
     if status == "complete" && !limit_raised {
         return Ok(ResumeState::Complete { frames });
     }
-    if run.parameters.mode == TemporalMode::Clip {
-        return Err(refuse(
-            "a clip-mode run solves the whole clip at once and cannot go on part-way. Pass \
-             --overwrite to start again"
-                .into(),
-        ));
-    }
-    if run.parameters.fusion.mesh == MeshKind::Image {
-        return Err(refuse(
-            "the image-plane mesh is built from the first frame's face, and a resumed run \
-             would build another. Pass --overwrite to start again"
-                .into(),
-        ));
+    if let Some(reason) = run.parameters.cannot_resume() {
+        return Err(refuse(reason.into()));
     }
     if !["running", "interrupted", "failed", "complete"].contains(&status.as_str()) {
         return Err(refuse(format!(
@@ -143,7 +132,7 @@ pub fn prepare_resume(dir: &Path, run: &RunDescription<'_>) -> Result<ResumeStat
         )));
     }
 
-    let Some(landmarks) = existing(dir, "landmarks.json") else {
+    let Some(landmarks) = existing(dir, file_names::LANDMARKS) else {
         return start_again(dir);
     };
     let scan = scan_frames(&landmarks, |bytes| {
@@ -152,7 +141,7 @@ pub fn prepare_resume(dir: &Path, run: &RunDescription<'_>) -> Result<ResumeStat
     // A killed or failed run may have left its last frame partly written in the other
     // streams. A run that reached the end of its input gave its last frames out without the
     // look-ahead the landmark smoother waits for (`latency_frames`). Both are done again.
-    let redo = run.parameters.latency_frames.max(1);
+    let redo = run.parameters.latency_frames().max(1);
     let whole = scan.records.len().saturating_sub(redo);
     if whole == 0 {
         return start_again(dir);
@@ -168,7 +157,7 @@ pub fn prepare_resume(dir: &Path, run: &RunDescription<'_>) -> Result<ResumeStat
 
     // The point cache: a sample per meshed frame while it is written; a finished one holds a
     // sample per frame (the frames without a mesh hold a meshed one's surface).
-    let cache = existing(dir, POINT_CACHE_FILE);
+    let cache = existing(dir, file_names::POINT_CACHE);
     let cache_indices = match &cache {
         Some(path) if path.extension().is_some_and(|e| e != "tmp") => frame_indices.clone(),
         _ => meshed_indices.clone(),
@@ -176,8 +165,9 @@ pub fn prepare_resume(dir: &Path, run: &RunDescription<'_>) -> Result<ResumeStat
     if !meshed_indices.is_empty() {
         let Some(cache) = &cache else {
             return Err(refuse(format!(
-                "{POINT_CACHE_FILE} is missing, and landmarks.json lists {} meshed frames. \
-                 Pass --overwrite to start again",
+                "{} is missing, and landmarks.json lists {} meshed frames. Pass --overwrite to \
+                 start again",
+                file_names::POINT_CACHE,
                 meshed_indices.len()
             )));
         };
@@ -190,25 +180,26 @@ pub fn prepare_resume(dir: &Path, run: &RunDescription<'_>) -> Result<ResumeStat
                 cache_indices.len()
             )));
         }
-        if !dir.join(CACHE_MESH_FILE).is_file() {
+        if !dir.join(file_names::CACHE_MESH).is_file() {
             return Err(refuse(format!(
-                "{CACHE_MESH_FILE}, the point cache's mesh, is missing. Pass --overwrite to \
-                 start again"
+                "{}, the point cache's mesh, is missing. Pass --overwrite to start again",
+                file_names::CACHE_MESH
             )));
         }
     }
 
     // The blendshape curves: a frame per fitted frame, in both files.
-    let fitted = run.parameters.model != "none";
+    let fitted = run.parameters.fits_model();
     let mut blendshape_cut = None;
     if fitted {
         let (Some(json), Some(csv)) = (
-            existing(dir, BLENDSHAPES_JSON),
-            existing(dir, BLENDSHAPES_CSV),
+            existing(dir, file_names::BLENDSHAPES_JSON),
+            existing(dir, file_names::BLENDSHAPES_CSV),
         ) else {
             return Err(refuse(format!(
-                "{BLENDSHAPES_JSON} or {BLENDSHAPES_CSV} is missing. Pass --overwrite to \
-                 start again"
+                "{} or {} is missing. Pass --overwrite to start again",
+                file_names::BLENDSHAPES_JSON,
+                file_names::BLENDSHAPES_CSV
             )));
         };
         let curves = scan_frames(&json, |bytes| {
@@ -246,10 +237,9 @@ pub fn prepare_resume(dir: &Path, run: &RunDescription<'_>) -> Result<ResumeStat
             into_tmp(&cache)?;
         }
         cache => {
-            for path in cache
-                .into_iter()
-                .chain([CACHE_MESH_FILE, CACHE_MATERIAL_FILE].map(|f| dir.join(f)))
-            {
+            for path in cache.into_iter().chain(
+                [file_names::CACHE_MESH, file_names::CACHE_MATERIAL_FILE].map(|f| dir.join(f)),
+            ) {
                 remove_file_if_present(&path)?;
             }
         }
@@ -320,7 +310,10 @@ struct BlendshapeRecord {
 
 /// What differs between the run recorded in `metrics` and `run`, in words (empty: the same).
 /// Both sides go through the same JSON text, so numbers compare exactly.
-fn differences(metrics: &serde_json::Value, run: &RunDescription<'_>) -> Vec<String> {
+fn differences<P: RunParameters>(
+    metrics: &serde_json::Value,
+    run: &RunDescription<'_, P>,
+) -> Vec<String> {
     let now = serde_json::to_string(run)
         .ok()
         .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).ok())
@@ -475,27 +468,41 @@ fn remove_later_plys(dir: &Path, after_frame: usize) -> Result<(), Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::Parameters;
-    use crate::input::FrameSelection;
+    use crate::resume_point::FrameSelection;
     use visage_camera::Intrinsics;
-    use visage_fusion::{FusionParams, MeshingOptions};
 
-    fn parameters(mode: TemporalMode, mesh: MeshKind) -> Parameters {
+    /// Parameters as the pipeline's would be recorded: a clip-mode or image-mesh run cannot
+    /// be continued.
+    #[derive(Clone, Debug, serde::Serialize)]
+    struct Parameters {
+        mode: &'static str,
+        mesh: &'static str,
+        landmark_smoothing: Option<f64>,
+    }
+
+    impl RunParameters for Parameters {
+        fn cannot_resume(&self) -> Option<&'static str> {
+            match (self.mode, self.mesh) {
+                ("clip", _) => Some("a clip-mode run cannot go on part-way"),
+                (_, "image") => Some("an image-plane mesh would be built again"),
+                _ => None,
+            }
+        }
+
+        fn latency_frames(&self) -> usize {
+            1
+        }
+
+        fn fits_model(&self) -> bool {
+            true
+        }
+    }
+
+    fn parameters(mode: &'static str, mesh: &'static str) -> Parameters {
         Parameters {
-            fusion: FusionParams {
-                mesh,
-                weights: visage_fem::Weights::default(),
-                subdivision: 2,
-                meshing: MeshingOptions::default(),
-                max_depth_m: 3.0,
-                fairing_gamma: None,
-            },
             mode,
-            depth: "face".into(),
-            model: "embedded".into(),
+            mesh,
             landmark_smoothing: Some(1.0),
-            latency_frames: 1,
-            keypoint_motion: false,
         }
     }
 
@@ -506,7 +513,7 @@ mod tests {
     /// A killed run's folder: `metrics.json` "running" for `run`, records of frames 0, 2, 4
     /// and half of frame 6 (frames 2 and 4 meshed, all fitted), the point cache and the curves
     /// with the frames before 6, PLYs of frames 2 and 4, an export.
-    fn killed_run(dir: &Path, run: &RunDescription<'_>) {
+    fn killed_run(dir: &Path, run: &RunDescription<'_, Parameters>) {
         let mut metrics = serde_json::to_value(run).unwrap();
         metrics["status"] = "running".into();
         std::fs::write(dir.join("metrics.json"), metrics.to_string()).unwrap();
@@ -562,7 +569,7 @@ mod tests {
     fn description<'a>(
         parameters: &'a Parameters,
         intrinsics: &'a Intrinsics,
-    ) -> RunDescription<'a> {
+    ) -> RunDescription<'a, Parameters> {
         RunDescription {
             input: "clip.mp4",
             intrinsics,
@@ -578,7 +585,7 @@ mod tests {
     fn a_killed_run_is_cut_back_to_the_frame_before_its_last_record() {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path();
-        let (p, k) = (parameters(TemporalMode::Streaming, MeshKind::Face), k());
+        let (p, k) = (parameters("streaming", "face"), k());
         let run = description(&p, &k);
         killed_run(dir, &run);
         let ResumeState::Continue(point) = prepare_resume(dir, &run).unwrap() else {
@@ -610,7 +617,7 @@ mod tests {
     fn another_run_is_refused_naming_what_differs() {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path();
-        let (p, k) = (parameters(TemporalMode::Streaming, MeshKind::Face), k());
+        let (p, k) = (parameters("streaming", "face"), k());
         killed_run(dir, &description(&p, &k));
         let mut other = p.clone();
         other.landmark_smoothing = Some(3.0);
@@ -640,8 +647,8 @@ mod tests {
     fn clip_mode_and_the_image_mesh_are_refused() {
         let k = k();
         for (mode, mesh, word) in [
-            (TemporalMode::Clip, MeshKind::Face, "clip-mode"),
-            (TemporalMode::Streaming, MeshKind::Image, "image-plane"),
+            ("clip", "face", "clip-mode"),
+            ("streaming", "image", "image-plane"),
         ] {
             let tmp = tempfile::tempdir().unwrap();
             let p = parameters(mode, mesh);
@@ -657,7 +664,7 @@ mod tests {
     fn a_complete_run_stays_unless_its_frame_limit_is_raised() {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path();
-        let (p, k) = (parameters(TemporalMode::Streaming, MeshKind::Face), k());
+        let (p, k) = (parameters("streaming", "face"), k());
         let mut run = description(&p, &k);
         run.selection.max_frames = Some(3);
         killed_run(dir, &run);
@@ -681,7 +688,7 @@ mod tests {
     #[test]
     fn an_empty_folder_or_a_run_without_frames_starts_afresh() {
         let tmp = tempfile::tempdir().unwrap();
-        let (p, k) = (parameters(TemporalMode::Streaming, MeshKind::Face), k());
+        let (p, k) = (parameters("streaming", "face"), k());
         let run = description(&p, &k);
         assert_eq!(
             prepare_resume(tmp.path(), &run).unwrap(),

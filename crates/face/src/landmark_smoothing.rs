@@ -12,7 +12,7 @@
 //! the fit, makes the pose, the blendshapes and the surface steady together. The tracker
 //! itself keeps the raw points, so its crop does not lag the face.
 
-use visage_face::FaceGeometry;
+use crate::FaceGeometry;
 use visage_temporal::{ConstantVelocity, FixedLagSmoother, TrackFilter};
 
 /// Frame interval assumed when the input has neither timestamps nor a frame rate (images).
@@ -57,7 +57,7 @@ impl FrameClock {
 }
 
 /// The landmark smoother and the time of its last frame.
-pub(crate) struct LandmarkSmoother {
+pub struct LandmarkSmoother {
     smoother: FixedLagSmoother,
     clock: FrameClock,
     scratch: Vec<f64>,
@@ -116,7 +116,7 @@ pub const DEFAULT_DISTANCE_SMOOTHING: f64 = 30.0;
 /// give, while scaling the fitted face about the camera centre leaves every projection where
 /// it was: a slow causal filter on the distance steadies the metric surface without moving
 /// it in the image.
-pub(crate) struct DistanceSmoother {
+pub struct DistanceSmoother {
     filter: ConstantVelocity,
     clock: FrameClock,
 }

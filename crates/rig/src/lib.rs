@@ -1,0 +1,26 @@
+//! The face rig: what a fitted face means to an animator. From the per-frame fit of the
+//! morphable model (ICT-FaceKit's expressions, `visage-morphable`) and the irises, it makes
+//! the 52 ARKit blendshape weights ([`IctToArkit`], its name tables), the eyes'
+//! rotations ([`eye_gaze`], held through blinks by the [`LidGate`]), measured from the
+//! person's resting face ([`RestPose`]), and the head's rotation, as one [`BlendshapeFrame`] per
+//! frame with Live Link Face's names and signs.
+
+#![forbid(unsafe_code)]
+
+mod arkit;
+mod blendshape_frame;
+mod gaze;
+mod histogram;
+mod lid_gate;
+mod rest_pose;
+
+pub use arkit::{
+    IctSource, IctToArkit, ARKIT_BLENDSHAPES, ARKIT_BLENDSHAPE_COUNT, ICT_EXPRESSIONS, ICT_TO_ARKIT,
+};
+pub use blendshape_frame::{
+    live_link_angles, BlendshapeFrame, BlendshapeTrack, LIVE_LINK_BLENDSHAPES, LIVE_LINK_ROTATIONS,
+    LIVE_LINK_VALUE_COUNT,
+};
+pub use gaze::{eye_gaze, eye_look_weights, EyeGaze};
+pub use lid_gate::LidGate;
+pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP};

@@ -1,0 +1,46 @@
+//! Errors of an output folder's files. Each names the file or folder at fault.
+
+use std::path::PathBuf;
+
+use visage_mesh::io::MeshIoError;
+
+/// What can go wrong writing, reading or continuing a run's files.
+#[derive(Debug, thiserror::Error)]
+pub enum RunFolderError {
+    /// An option outside its documented range (`name` as the command line spells it).
+    #[error("{name} {value}: {reason}")]
+    InvalidOption {
+        name: &'static str,
+        value: String,
+        reason: &'static str,
+    },
+    /// A file holds nothing usable.
+    #[error("{}: {reason}", path.display())]
+    Input { path: PathBuf, reason: String },
+    /// An output file or folder could not be written.
+    #[error("cannot write {}", path.display())]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A file of a previous run could not be read.
+    #[error("cannot read {}", path.display())]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A previous run in an output folder cannot be continued (`reason` says why and what to
+    /// do instead).
+    #[error("{}: cannot resume the run in this folder: {reason}", dir.display())]
+    Resume { dir: PathBuf, reason: String },
+    /// An output folder that holds something else than a run to continue.
+    #[error(
+        "{}: the output folder is not empty; it holds {holds}. Pass --overwrite to replace a \
+         previous run's files (other files stay), or choose another folder",
+        dir.display()
+    )]
+    NotEmpty { dir: PathBuf, holds: String },
+    /// A mesh file could not be written.
+    #[error("cannot write {}", path.display())]
+    WriteMesh { path: PathBuf, source: MeshIoError },
+}

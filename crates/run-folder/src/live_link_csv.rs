@@ -1,0 +1,322 @@
+//! The ARKit curves as a Live Link Face CSV (`blendshapes.csv`, [`LiveLinkCsvWriter`]), streamed
+//! under a temporary name and renamed when finished.
+//!
+//! # Live Link Face CSV
+//! One header line, then one row per frame:
+//! `Timecode,BlendShapeCount,EyeBlinkLeft,…,TongueOut,HeadYaw,HeadPitch,HeadRoll,LeftEyeYaw,
+//! LeftEyePitch,LeftEyeRoll,RightEyeYaw,RightEyePitch,RightEyeRoll` — the 52 blendshapes in
+//! Apple's names, capitalised ([`LIVE_LINK_BLENDSHAPES`]), then the 9 rotations
+//! ([`LIVE_LINK_ROTATIONS`], [`visage_rig::live_link_angles`] says how they are measured); `BlendShapeCount` is 61, values have 10 decimals. The column
+//! order is that of real Live Link Face exports (the public repository
+//! `alexdjulin/LiveLinkFace-CSV-Retarget-For-Motionbuilder`, `anim/*.csv` and
+//! `csv/facial.csv`), which Blender and Dart importers copy verbatim. It is *not* Unreal's
+//! `EARFaceBlendShape` order used by the UDP stream (`JimWest/PyLiveLinkFace`'s enum): the CSV
+//! has `JawRight,JawLeft` and `MouthRight,MouthLeft` where the enum has left first. Each value
+//! is written under its own name, so either order reads back correctly by name.
+//!
+//! **Timecode** `HH:MM:SS:FF.fff`: `FF` is the frame within the second and `.fff` the
+//! sub-frame, in thousandths of a frame — not milliseconds. Real exports show it: rows 1/30 s
+//! apart at a 60 fps timecode rate read `13:13:04:31.652`, `…:33.651`, `…:35.651`, …,
+//! `…:59.648`, `13:13:05:01.648` (the frame steps by 2 and wraps after 59, the fraction drifts
+//! by a thousandth; as milliseconds it would step by 33). It is Unreal's `FQualifiedFrameTime`,
+//! frame number plus sub-frame. [`live_link_timecode`] writes it from a timestamp `t` and the
+//! timecode rate `fps`: the frame time `t · fps` rounded to a thousandth of a frame is split
+//! into whole frames and the fraction, and the whole frames are counted in SMPTE non-drop-frame
+//! style with `round(fps)` frames a second (29.97 and 30000/1001 count 30 a second, 59.94
+//! counts 60, 23.976 counts 24; like Unreal's `FTimecode` for a non-integer rate, `ceil`). At
+//! 29.97 the timecode thus runs 0.1 % behind the clock, as NTSC non-drop timecode does. Ours
+//! starts at `00:00:00:00.000` on the first frame; the app stamps the time of day. The app's
+//! own timecode rate is 60 even when it captures at 30 fps, and some importers assume 60:
+//! pass 60 as the rate for those.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use visage_rig::{
+    BlendshapeFrame, LIVE_LINK_BLENDSHAPES, LIVE_LINK_ROTATIONS, LIVE_LINK_VALUE_COUNT,
+};
+
+use crate::file_names;
+use crate::stream::{check_fps, create_tmp, finish_tmp, invalid_frame, open_tmp_for_append};
+use crate::RunFolderError as Error;
+
+/// The Live Link Face timecode `HH:MM:SS:FF.fff` of `timestamp_s` at the timecode rate `fps`:
+/// `FF` the frame within the second, `.fff` thousandths of a frame (see the module's docs).
+/// Negative times read as 0.
+pub fn live_link_timecode(timestamp_s: f64, fps: f64) -> String {
+    let per_second = timecode_frames_per_second(fps);
+    let thousandths = (timestamp_s.max(0.0) * fps * 1000.0).round() as u64;
+    let (frames, sub) = (thousandths / 1000, thousandths % 1000);
+    let (seconds, frame) = (frames / per_second, frames % per_second);
+    let (h, m, s) = (seconds / 3600, seconds / 60 % 60, seconds % 60);
+    format!("{h:02}:{m:02}:{s:02}:{frame:02}.{sub:03}")
+}
+
+/// Frames counted per timecode second: `fps` when it is a whole number, else `ceil(fps)`.
+fn timecode_frames_per_second(fps: f64) -> u64 {
+    let whole = fps.round();
+    let n = if (fps - whole).abs() < 1e-6 {
+        whole
+    } else {
+        fps.ceil()
+    };
+    (n as u64).max(1)
+}
+
+/// Streams frames to a Live Link Face CSV (the module's docs): rows go to `<name>.tmp`, which
+/// [`finish`](Self::finish) renames to the final name; dropped unfinished (or when finishing
+/// fails), the rows so far stay under the temporary name, where `visage run --resume` finds
+/// them.
+pub struct LiveLinkCsvWriter {
+    path: PathBuf,
+    tmp: PathBuf,
+    out: Option<BufWriter<File>>,
+    fps: f64,
+    rows: usize,
+}
+
+impl LiveLinkCsvWriter {
+    /// Starts `dir/blendshapes.csv` with the timecode rate `fps` (see [`Self::create`]).
+    pub fn in_dir(dir: &Path, fps: f64) -> Result<LiveLinkCsvWriter, Error> {
+        LiveLinkCsvWriter::create(&dir.join(file_names::BLENDSHAPES_CSV), fps)
+    }
+
+    /// Starts the CSV `path` and writes its header; `fps` is the timecode rate, normally the
+    /// input's frame rate (the rate the timestamps came from).
+    ///
+    /// # Errors
+    /// `fps` not positive and finite; the temporary file cannot be written.
+    pub fn create(path: &Path, fps: f64) -> Result<LiveLinkCsvWriter, Error> {
+        check_fps(fps)?;
+        let (tmp, mut out) = create_tmp(path)?;
+        let header = ["Timecode", "BlendShapeCount"]
+            .iter()
+            .chain(&LIVE_LINK_BLENDSHAPES)
+            .chain(&LIVE_LINK_ROTATIONS)
+            .copied()
+            .collect::<Vec<_>>()
+            .join(",");
+        let result = writeln!(out, "{header}");
+        let writer = LiveLinkCsvWriter {
+            path: path.to_owned(),
+            tmp,
+            out: Some(out),
+            fps,
+            rows: 0,
+        };
+        result.map_err(|source| writer.io_error(source))?;
+        Ok(writer)
+    }
+
+    /// Continues `dir/blendshapes.csv`'s temporary file, which holds its header and `rows`
+    /// rows (a resumed run; [`crate::prepare_resume`] cut it there).
+    ///
+    /// # Errors
+    /// `fps` not positive and finite; the temporary file cannot be opened.
+    pub fn append_in_dir(dir: &Path, fps: f64, rows: usize) -> Result<LiveLinkCsvWriter, Error> {
+        check_fps(fps)?;
+        let path = dir.join(file_names::BLENDSHAPES_CSV);
+        let (tmp, out) = open_tmp_for_append(&path)?;
+        Ok(LiveLinkCsvWriter {
+            path,
+            tmp,
+            out: Some(out),
+            fps,
+            rows,
+        })
+    }
+
+    /// The final path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Rows written so far.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Hands the rows so far to the operating system.
+    ///
+    /// # Errors
+    /// The temporary file cannot be written.
+    pub fn flush(&mut self) -> Result<(), Error> {
+        let result = self.out.as_mut().map_or(Ok(()), Write::flush);
+        result.map_err(|source| self.io_error(source))
+    }
+
+    /// Appends `frame`'s row.
+    ///
+    /// # Errors
+    /// A negative or non-finite timestamp or a non-finite value; the file cannot be written.
+    pub fn write(&mut self, frame: &BlendshapeFrame) -> Result<(), Error> {
+        frame
+            .check()
+            .map_err(|reason| invalid_frame(&self.path, reason))?;
+        let mut row = live_link_timecode(frame.timestamp_s, self.fps);
+        row.push_str(&format!(",{LIVE_LINK_VALUE_COUNT}"));
+        for v in frame.live_link_values() {
+            // `+ 0.0` writes −0 as 0.
+            row.push_str(&format!(",{:.10}", v + 0.0));
+        }
+        row.push('\n');
+        let result = match self.out.as_mut() {
+            Some(out) => out.write_all(row.as_bytes()),
+            None => Ok(()),
+        };
+        result.map_err(|source| self.io_error(source))?;
+        self.rows += 1;
+        Ok(())
+    }
+
+    /// Completes the file and moves it to its final name, which it returns.
+    pub fn finish(mut self) -> Result<PathBuf, Error> {
+        match self.out.take() {
+            Some(out) => finish_tmp(out, b"", &self.tmp, &self.path),
+            None => Ok(self.path.clone()),
+        }
+    }
+
+    fn io_error(&self, source: std::io::Error) -> Error {
+        Error::Write {
+            path: self.tmp.clone(),
+            source,
+        }
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::{tmp_path, BlendshapesJsonWriter};
+
+    /// The Live Link Face CSV header, copied from a real export.
+    const LIVE_LINK_HEADER: &str = "Timecode,BlendShapeCount,EyeBlinkLeft,EyeLookDownLeft,\
+        EyeLookInLeft,EyeLookOutLeft,EyeLookUpLeft,EyeSquintLeft,EyeWideLeft,EyeBlinkRight,\
+        EyeLookDownRight,EyeLookInRight,EyeLookOutRight,EyeLookUpRight,EyeSquintRight,\
+        EyeWideRight,JawForward,JawRight,JawLeft,JawOpen,MouthClose,MouthFunnel,MouthPucker,\
+        MouthRight,MouthLeft,MouthSmileLeft,MouthSmileRight,MouthFrownLeft,MouthFrownRight,\
+        MouthDimpleLeft,MouthDimpleRight,MouthStretchLeft,MouthStretchRight,MouthRollLower,\
+        MouthRollUpper,MouthShrugLower,MouthShrugUpper,MouthPressLeft,MouthPressRight,\
+        MouthLowerDownLeft,MouthLowerDownRight,MouthUpperUpLeft,MouthUpperUpRight,BrowDownLeft,\
+        BrowDownRight,BrowInnerUp,BrowOuterUpLeft,BrowOuterUpRight,CheekPuff,CheekSquintLeft,\
+        CheekSquintRight,NoseSneerLeft,NoseSneerRight,TongueOut,HeadYaw,HeadPitch,HeadRoll,\
+        LeftEyeYaw,LeftEyePitch,LeftEyeRoll,RightEyeYaw,RightEyePitch,RightEyeRoll";
+
+    pub(crate) fn sample_frame(index: usize, timestamp_s: f64) -> BlendshapeFrame {
+        let mut f = BlendshapeFrame::new(index, timestamp_s);
+        for (i, w) in f.weights.iter_mut().enumerate() {
+            *w = (i as f32 * 0.37 + index as f32 * 0.11).fract();
+        }
+        f.head = [0.1, -0.2, 0.05];
+        f.left_eye = [-0.25, 0.125, 0.0];
+        f.right_eye = [-0.2, 0.125, -0.01];
+        f
+    }
+
+    #[test]
+    fn csv_header_is_live_link_faces() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut w = LiveLinkCsvWriter::in_dir(dir.path(), 30.0).unwrap();
+        let csv = dir.path().join(file_names::BLENDSHAPES_CSV);
+        assert!(!csv.exists(), "nothing under the final name before finish");
+        w.write(&sample_frame(0, 0.0)).unwrap();
+        w.write(&sample_frame(1, 1.0 / 30.0)).unwrap();
+        assert_eq!(w.finish().unwrap(), csv);
+        assert!(!tmp_path(&csv).exists());
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        let expected: String = LIVE_LINK_HEADER.split_whitespace().collect();
+        assert_eq!(lines[0], expected);
+        assert_eq!(lines[0].split(',').count(), 2 + LIVE_LINK_VALUE_COUNT);
+        assert_eq!(lines.len(), 3);
+        let row: Vec<&str> = lines[2].split(',').collect();
+        assert_eq!(row.len(), 2 + LIVE_LINK_VALUE_COUNT);
+        assert_eq!(&row[..2], ["00:00:00:01.000", "61"]);
+        let frame = sample_frame(1, 1.0 / 30.0);
+        let values: Vec<f32> = row[2..].iter().map(|v| v.parse().unwrap()).collect();
+        for (got, want) in values.iter().zip(frame.live_link_values()) {
+            assert!((got - want).abs() <= 1e-9, "{got} vs {want}");
+        }
+        // By name: the weights follow the header.
+        let jaw_left = lines[0].split(',').position(|c| c == "JawLeft").unwrap();
+        assert_eq!(
+            row[jaw_left].parse::<f32>().unwrap(),
+            frame.weight("jawLeft").unwrap()
+        );
+        assert_eq!(row[2 + 52], "0.1000000015"); // HeadYaw, f32 0.1 to 10 decimals
+    }
+
+    #[test]
+    fn unfinished_writers_leave_their_frames_under_the_temporary_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut csv = LiveLinkCsvWriter::in_dir(dir.path(), 30.0).unwrap();
+        let mut json = BlendshapesJsonWriter::in_dir(dir.path(), Some(30.0)).unwrap();
+        csv.write(&sample_frame(0, 0.0)).unwrap();
+        json.write(&sample_frame(0, 0.0)).unwrap();
+        let mut bad = sample_frame(1, 0.1);
+        bad.head[1] = f32::NAN;
+        let err = csv.write(&bad).unwrap_err();
+        assert!(matches!(err, Error::Write { .. }), "{err}");
+        assert!(json.write(&bad).is_err());
+        assert!(csv.write(&sample_frame(2, f64::NAN)).is_err());
+        drop((csv, json));
+        // Nothing under a final name; the frames written so far under the temporary ones,
+        // where a resumed run continues them.
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["blendshapes.csv.tmp", "blendshapes.json.tmp"]);
+        let csv_rows = std::fs::read_to_string(dir.path().join("blendshapes.csv.tmp")).unwrap();
+        assert_eq!(csv_rows.lines().count(), 2, "the header and frame 0");
+        assert!(LiveLinkCsvWriter::in_dir(dir.path(), 0.0).is_err());
+        assert!(BlendshapesJsonWriter::in_dir(dir.path(), Some(f64::NAN)).is_err());
+        let missing = dir.path().join("no/such/dir");
+        assert!(matches!(
+            LiveLinkCsvWriter::in_dir(&missing, 30.0),
+            Err(Error::Write { .. })
+        ));
+    }
+
+    #[test]
+    fn timecodes_count_frames_and_thousandths_of_a_frame() {
+        // 30 fps.
+        assert_eq!(live_link_timecode(0.0, 30.0), "00:00:00:00.000");
+        assert_eq!(live_link_timecode(29.0 / 30.0, 30.0), "00:00:00:29.000");
+        assert_eq!(live_link_timecode(31.0 / 30.0, 30.0), "00:00:01:01.000");
+        assert_eq!(live_link_timecode(0.05, 30.0), "00:00:00:01.500");
+        assert_eq!(live_link_timecode(3661.5, 30.0), "01:01:01:15.000");
+        assert_eq!(live_link_timecode(-1.0, 30.0), "00:00:00:00.000");
+        // 29.97 (NTSC): 30 frames a timecode second, non-drop-frame.
+        let ntsc = 30000.0 / 1001.0;
+        for (n, tc) in [
+            (29, "00:00:00:29.000"),
+            (30, "00:00:01:00.000"),
+            (1799, "00:00:59:29.000"),
+            (1800, "00:01:00:00.000"),
+            (107_892, "00:59:56:12.000"),
+        ] {
+            assert_eq!(live_link_timecode(n as f64 / ntsc, ntsc), tc, "frame {n}");
+            assert_eq!(live_link_timecode(n as f64 / 29.97, 29.97), tc, "frame {n}");
+        }
+        assert_eq!(
+            live_link_timecode(10.25 / ntsc, ntsc),
+            "00:00:00:10.250",
+            "a quarter frame"
+        );
+        // 60 fps, as Live Link Face stamps its takes.
+        assert_eq!(live_link_timecode(0.5, 60.0), "00:00:00:30.000");
+        assert_eq!(
+            live_link_timecode(1.0 + 59.0 / 60.0, 60.0),
+            "00:00:01:59.000"
+        );
+        assert_eq!(live_link_timecode(2.0, 60.0), "00:00:02:00.000");
+        assert_eq!(
+            live_link_timecode((31.652 + 60.0 * 4.0) / 60.0, 60.0),
+            "00:00:04:31.652"
+        );
+    }
+}
