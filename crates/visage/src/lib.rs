@@ -48,6 +48,7 @@ mod config;
 mod depth_folder;
 mod depth_stage;
 mod error;
+mod first_faces;
 mod folder_run;
 mod input;
 mod keypoint_motion;
@@ -66,6 +67,7 @@ pub use config::{
 };
 pub use depth_folder::{fuse_depth_folder, FuseOptions};
 pub use error::Error;
+pub use first_faces::first_faces;
 pub use folder_run::{run_into, FolderOptions, FolderRun};
 pub use input::{FrameFilter, Input, KeptFrames};
 pub use keypoint_motion::{

@@ -534,7 +534,11 @@ pub fn run_with_stop(
     if args.faces == FacesArg::Largest {
         return run_face(&args, &args.out, FaceTarget::Largest, stop).map(|_| ());
     }
-    let faces = first_faces(p)?;
+    let models = p
+        .models
+        .clone()
+        .unwrap_or_else(visage_face::model_files::models_dir);
+    let faces = visage::first_faces(p.open_input()?, &models)?;
     if faces.is_empty() {
         return Err(Failure {
             code: crate::exit::NO_FACE,
@@ -586,32 +590,6 @@ pub fn run_with_stop(
         &serde_json::json!({ "input": p.input_path().display().to_string(), "faces": records }),
     )?;
     first_error.map_or(Ok(()), Err)
-}
-
-/// The faces of the first frame that shows any, left to right: the frame's input index and
-/// each face's box (`[x, y, width, height]`, pixels).
-fn first_faces(p: &PipelineArgs) -> anyhow::Result<Vec<(usize, [f32; 4])>> {
-    let models = p
-        .models
-        .clone()
-        .unwrap_or_else(visage_face::model_files::models_dir);
-    let mut mesh = visage_face::FaceMesh::load(&models)?;
-    mesh.detectors = visage_face::DetectorUse::Both;
-    let input = p.open_input()?;
-    for frame in input {
-        let frame = frame?;
-        let mut boxes: Vec<[f32; 4]> = mesh
-            .process(&frame.image)
-            .with_context(|| format!("{}: face detection", frame.source))?
-            .iter()
-            .map(|f| f.bbox)
-            .collect();
-        if !boxes.is_empty() {
-            boxes.sort_by(|a, b| a[0].total_cmp(&b[0]));
-            return Ok(boxes.into_iter().map(|b| (frame.index, b)).collect());
-        }
-    }
-    Ok(Vec::new())
 }
 
 /// One tracked face's run into `dir` (continued with `--resume`): the frames meshed, or the
