@@ -191,7 +191,7 @@ mod weight_array {
     }
 }
 
-/// `blendshapes.json` as a whole (the module's docs): what [`BlendshapesJsonWriter`] streams,
+/// `blendshapes.json` as a whole: what the run folder's `BlendshapesJsonWriter` streams,
 /// for reading it back.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BlendshapeTrack {

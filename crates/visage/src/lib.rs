@@ -70,11 +70,7 @@ pub use error::Error;
 pub use first_faces::first_faces;
 pub use folder_run::{run_into, FolderOptions, FolderRun};
 pub use input::{FrameFilter, Input, KeptFrames};
-pub use keypoint_motion::{
-    FACE_MARGIN, INLIER_THRESHOLD_M, MAX_FACE_CROP_PX, MAX_FACE_KEYPOINTS, MIN_INLIERS,
-};
 pub use reconstructor::{error_chain, FrameResult, Identity, Reconstructor, RunOutcome};
-pub use rigid_jitter::rigid_residual_rms;
 pub use sink::{FrameSink, MeshFrame};
 pub use stages::Surfaces;
 
@@ -84,9 +80,8 @@ pub use visage_depth::{
     RgbdLayout, RgbdOptions, RgbdRecording,
 };
 pub use visage_face::{
-    FaceTarget, CLIP_LATENCY_FRAMES, CUT_FACE_JUMP, CUT_PICTURE_CHANGE, DEFAULT_DISTANCE_SMOOTHING,
-    DEFAULT_FRAME_INTERVAL_S, DEFAULT_LANDMARK_SMOOTHING, DEFAULT_LATENCY_FRAMES,
-    MAX_LATENCY_FRAMES,
+    FaceTarget, CLIP_LATENCY_FRAMES, DEFAULT_FRAME_INTERVAL_S, DEFAULT_LANDMARK_SMOOTHING,
+    DEFAULT_LATENCY_FRAMES, MAX_LATENCY_FRAMES,
 };
 pub use visage_fem::{ClipOptions, Weights};
 pub use visage_fusion::{DepthSequence, MeshKind, MeshingOptions, DEFAULT_MAX_DEPTH_M};
