@@ -11,9 +11,9 @@
 //! # Files
 //! - `step`: the compiled plan's instruction (`Step`), one kernel call over
 //!   tensor indices, and the tensors each one reads and writes.
-//! - `compile`: [`Network::compile`], from a parsed model to the step list, with the limits
-//!   that keep a corrupt model from allocating without bound ([`MAX_TENSOR_VALUES`],
-//!   [`MAX_NETWORK_VALUES`]).
+//! - `compile/`: [`Network::compile`], from a parsed model to the step list: the limits that
+//!   keep a corrupt model from allocating without bound ([`MAX_TENSOR_VALUES`],
+//!   [`MAX_NETWORK_VALUES`]), the constants, one file per operator family, the fusion pass.
 //! - `liveness`: buffer planning, the activation buffer ("slot") of each tensor from the
 //!   tensors' lifetimes.
 //! - `run`: the [`Network`] type, its input and outputs, and [`Network::run`].
