@@ -59,9 +59,6 @@ pub use face_geometry::{fit_face_geometry, FaceGeometry, FacePose};
 pub mod face_depth;
 
 pub use face_depth::{face_trimesh, render_faces_depth, render_surface_depth};
-pub mod kdtree;
-
-pub use kdtree::KdTree;
 mod regions;
 
 pub use regions::FaceRegion;
