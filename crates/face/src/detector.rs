@@ -15,7 +15,8 @@ use crate::anchors::{
 };
 use crate::letterbox::{letterbox_bilinear, letterbox_resize, Letterbox};
 use crate::nms::{weighted_nms, NMS_IOU_THRESHOLD};
-use crate::{sigmoid, Detection, FaceError, ModelFile, Network};
+use crate::{sigmoid, Detection, FaceError, ModelFile};
+use visage_nn::Network;
 
 /// Minimum face score MediaPipe's short-range face detection keeps (`min_score_thresh`).
 pub const DETECTION_SCORE_THRESHOLD: f32 = 0.5;

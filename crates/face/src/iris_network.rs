@@ -4,7 +4,8 @@
 
 use std::path::Path;
 
-use crate::{FaceError, ModelFile, Network};
+use crate::{FaceError, ModelFile};
+use visage_nn::Network;
 
 /// Input side of the iris network, pixels.
 pub const IRIS_INPUT: usize = 64;

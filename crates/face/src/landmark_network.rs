@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use crate::{FaceError, ModelFile, Network};
+use crate::{FaceError, ModelFile};
+use visage_nn::Network;
 
 /// Input side of the landmark network, pixels.
 pub const LANDMARK_INPUT: usize = 192;

@@ -4,8 +4,8 @@
 //! that turns 468 landmarks into a metric mesh and a dense depth map.
 //!
 //! Layers: [`model_files`] (verified `.tflite` files) → the inference engine of `visage-nn`
-//! ([`Network`]) → networks ([`detector`], [`landmarker`], [`iris`]) → [`tracker`] →
-//! [`face_geometry`].
+//! ([`Network`](visage_nn::Network)) → networks ([`detector`], [`landmarker`], [`iris`]) →
+//! [`tracker`] → [`face_geometry`].
 
 #![forbid(unsafe_code)]
 
@@ -14,8 +14,6 @@ pub mod model_files;
 
 pub use error::FaceError;
 pub use model_files::{models_dir, ModelFile};
-// The inference engine lives in `visage-nn`; re-exported under its former paths.
-pub use visage_nn::{float16, network, ops, tflite, Network, NnError};
 pub mod anchors;
 pub mod landmark_network;
 
@@ -67,9 +65,6 @@ pub use face_geometry::{fit_face_geometry, FaceGeometry, FacePose};
 pub mod face_depth;
 
 pub use face_depth::{face_trimesh, render_faces_depth, render_surface_depth};
-pub mod kdtree;
-
-pub use kdtree::KdTree;
 mod regions;
 
 pub use regions::FaceRegion;

@@ -7,3 +7,11 @@ pub enum NnError {
     #[error("{name}: invalid or unsupported TFLite model: {reason}")]
     Tflite { name: String, reason: String },
 }
+
+/// An [`NnError::Tflite`] for the model called `name`.
+pub(crate) fn err(name: &str, reason: String) -> NnError {
+    NnError::Tflite {
+        name: name.to_owned(),
+        reason,
+    }
+}

@@ -61,8 +61,8 @@
 //! # }
 //! ```
 
-// Unsafe code is denied except in `network`, whose one block calls the AVX2 + FMA build of the
-// kernels after the run-time CPU check, in `ops::separately` (the same for the memory-bound
+// Unsafe code is denied except in `network::run`, whose one block calls the AVX2 + FMA build of
+// the kernels after the run-time CPU check, in `ops::separately` (the same for the memory-bound
 // passes) and in the explicit vector kernels (`ops::avx512`, the `avx2` modules of the
 // convolutions and of `bilinear`), each block with its `SAFETY:`.
 #![deny(unsafe_code)]
@@ -71,7 +71,6 @@
 pub mod bilinear;
 mod error;
 pub mod float16;
-#[allow(unsafe_code)]
 pub mod network;
 pub mod ops;
 pub mod sparse;
