@@ -1,8 +1,9 @@
 //! Vertex normals and their transformation: Eq. (6.2).
 
 use rayon::prelude::*;
+use visage_camera::vec3::{cross, normalize, sub};
 
-use crate::mat4::{cross, normalize, sub, Mat3};
+use crate::mat4::Mat3;
 use crate::simd::with_simd;
 use crate::RenderError;
 
@@ -97,7 +98,7 @@ const MIN_VERTEX_RANGE: usize = 4096;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mat4::dot;
+    use visage_camera::vec3::dot;
 
     #[test]
     fn normals_stay_perpendicular_under_non_uniform_scaling() {
