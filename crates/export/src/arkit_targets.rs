@@ -8,6 +8,7 @@
 
 use rayon::prelude::*;
 use visage::{IctSource, ARKIT_BLENDSHAPES, ICT_TO_ARKIT};
+use visage_camera::vec3::distance2;
 use visage_camera::RigidTransform;
 use visage_mesh::point_to_mesh::closest_point_barycentric;
 use visage_morphable::FaceModel;
@@ -145,7 +146,7 @@ fn closest_point(
 ) -> (usize, [f64; 3]) {
     let mut nearest = [(f64::INFINITY, 0usize); NEAREST_CORNERS];
     for (v, &q) in vertices.iter().enumerate() {
-        let d = dist2(q, p);
+        let d = distance2(q, p);
         if d < nearest[NEAREST_CORNERS - 1].0 {
             nearest[NEAREST_CORNERS - 1] = (d, v);
             nearest.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -158,7 +159,7 @@ fn closest_point(
             let bary = closest_point_barycentric(p, a, b, c);
             let q: [f64; 3] =
                 std::array::from_fn(|k| bary[0] * a[k] + bary[1] * b[k] + bary[2] * c[k]);
-            let d = dist2(q, p);
+            let d = distance2(q, p);
             if d < best.0 {
                 best = (d, t, bary);
             }
@@ -176,10 +177,6 @@ fn triangles_around(vertex_count: usize, triangles: &[[u32; 3]]) -> Vec<Vec<usiz
         }
     }
     around
-}
-
-fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
-    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum()
 }
 
 #[cfg(test)]
