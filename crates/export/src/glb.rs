@@ -441,7 +441,11 @@ mod tests {
         let mut v: Vec<[f32; 3]> = (0..n * n)
             .map(|k| {
                 let (i, j) = ((k % n) as f32, (k / n) as f32);
-                [0.01 * i, 0.01 * j, 0.003 * (1.3 * i).sin() * (0.7 * j).cos()]
+                [
+                    0.01 * i,
+                    0.01 * j,
+                    0.003 * (1.3 * i).sin() * (0.7 * j).cos(),
+                ]
             })
             .collect();
         v.push([0.5, 0.5, 0.5]);
