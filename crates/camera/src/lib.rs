@@ -17,6 +17,7 @@ mod error;
 mod intrinsics;
 mod rigid_fit;
 mod rigid_transform;
+pub mod vec3;
 
 pub use depth_kind::DepthKind;
 pub use depth_map::DepthMap;

@@ -38,6 +38,7 @@
 //! - **ms_per_frame**: the method's per-frame wall time (set-up excluded).
 
 use faer::Mat;
+use visage_camera::vec3::{distance2, sub};
 use visage_fem::SurfaceMetrics;
 use visage_fusion::{to_positions, FaceDomain, FusionSetup};
 
@@ -329,10 +330,6 @@ fn row(m: &Mat<f64>, i: usize) -> [f64; 3] {
     [m[(i, 0)], m[(i, 1)], m[(i, 2)]]
 }
 
-fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
-    (0..3).map(|c| (a[c] - b[c]).powi(2)).sum()
-}
-
 /// Evaluates every method's outputs on one sequence into `accumulators` (same order as `runs`).
 ///
 /// # Panics
@@ -462,7 +459,7 @@ pub fn evaluate_sequence(
                     for i in (0..n).filter(|&i| face[i]) {
                         if let (Some(a), Some(b)) = (g1[i], g0[i]) {
                             let v: [f64; 3] = std::array::from_fn(|c| s[(i, c)] - p[(i, c)]);
-                            acc.lag_sq[tau] += dist2(v, std::array::from_fn(|c| a[c] - b[c]));
+                            acc.lag_sq[tau] += distance2(v, sub(a, b));
                             acc.lag_n[tau] += 1;
                         }
                     }

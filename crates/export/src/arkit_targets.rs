@@ -7,6 +7,7 @@
 //! driven by the run's weight curves; the residual targets carry what they do not explain.
 
 use rayon::prelude::*;
+use visage_camera::vec3::distance2;
 use visage_camera::RigidTransform;
 use visage_mesh::point_to_mesh::closest_point_barycentric;
 use visage_morphable::FaceModel;
@@ -146,7 +147,7 @@ fn closest_point(
 ) -> (usize, [f64; 3]) {
     let mut nearest = [(f64::INFINITY, 0usize); NEAREST_CORNERS];
     for (v, &q) in vertices.iter().enumerate() {
-        let d = dist2(q, p);
+        let d = distance2(q, p);
         if d < nearest[NEAREST_CORNERS - 1].0 {
             nearest[NEAREST_CORNERS - 1] = (d, v);
             nearest.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -159,7 +160,7 @@ fn closest_point(
             let bary = closest_point_barycentric(p, a, b, c);
             let q: [f64; 3] =
                 std::array::from_fn(|k| bary[0] * a[k] + bary[1] * b[k] + bary[2] * c[k]);
-            let d = dist2(q, p);
+            let d = distance2(q, p);
             if d < best.0 {
                 best = (d, t, bary);
             }
@@ -177,10 +178,6 @@ fn triangles_around(vertex_count: usize, triangles: &[[u32; 3]]) -> Vec<Vec<usiz
         }
     }
     around
-}
-
-fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
-    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum()
 }
 
 #[cfg(test)]

@@ -11,7 +11,9 @@ use gltf_json as json;
 use json::validation::{Checked, USize64};
 use json::Index;
 use serde_json::value::RawValue;
+use visage_camera::vec3::norm;
 use visage_camera::Intrinsics;
+use visage_render::normals::vertex_normal_sums;
 
 use crate::morph_animation::MorphAnimation;
 use crate::ExportError;
@@ -134,29 +136,15 @@ pub fn write_glb(
     b.finish()
 }
 
-/// Area-weighted unit vertex normals ((0, 0, 1) where a vertex has no area).
+/// Unit area-weighted vertex normals in `f32` ([`visage_render::normals::vertex_normal_sums`]
+/// divided by their norm in `f64`, then rounded), `+z` for a vertex of no or only degenerate
+/// triangles (glTF requires unit normals).
 fn vertex_normals(vertices: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<[f32; 3]> {
-    let mut acc = vec![[0.0f64; 3]; vertices.len()];
-    for t in triangles {
-        let [a, b, c] = t.map(|i| vertices[i as usize].map(f64::from));
-        let (u, v) = (
-            [0, 1, 2].map(|k| b[k] - a[k]),
-            [0, 1, 2].map(|k| c[k] - a[k]),
-        );
-        let n = [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ];
-        for &i in t {
-            for k in 0..3 {
-                acc[i as usize][k] += n[k];
-            }
-        }
-    }
-    acc.iter()
-        .map(|n| {
-            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let vertices: Vec<[f64; 3]> = vertices.iter().map(|p| p.map(f64::from)).collect();
+    vertex_normal_sums(&vertices, triangles)
+        .iter()
+        .map(|&n| {
+            let len = norm(n);
             if len > 0.0 {
                 n.map(|x| (x / len) as f32)
             } else {
@@ -439,5 +427,41 @@ impl Builder {
         out.extend_from_slice(b"BIN\0");
         out.extend_from_slice(&self.bin);
         Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normals_are_the_renderers_rounded_to_f32_with_plus_z_where_there_is_no_area() {
+        // A bumpy 6 × 6 grid, one degenerate triangle and an unused vertex (index 36).
+        let n = 6u32;
+        let mut v: Vec<[f32; 3]> = (0..n * n)
+            .map(|k| {
+                let (i, j) = ((k % n) as f32, (k / n) as f32);
+                [
+                    0.01 * i,
+                    0.01 * j,
+                    0.003 * (1.3 * i).sin() * (0.7 * j).cos(),
+                ]
+            })
+            .collect();
+        v.push([0.5, 0.5, 0.5]);
+        let mut t = vec![[0, 0, 1]];
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let a = j * n + i;
+                t.extend([[a, a + 1, a + n + 1], [a, a + n + 1, a + n]]);
+            }
+        }
+        let got = vertex_normals(&v, &t);
+        let v64: Vec<[f64; 3]> = v.iter().map(|p| p.map(f64::from)).collect();
+        let want = visage_render::vertex_normals(&v64, &t);
+        for (g, w) in got.iter().zip(&want).take(36) {
+            assert_eq!(g.map(f32::to_bits), w.map(|x| (x as f32).to_bits()));
+        }
+        assert_eq!(got[36], [0.0, 0.0, 1.0]);
     }
 }

@@ -18,6 +18,7 @@
 //! Boundary vertices are excluded from both means: there the Laplacian measures the boundary's
 //! curvature, not the surface's.
 
+use visage_camera::vec3::{cross, dot, norm, sub};
 use visage_mesh::OneRing;
 
 /// Per-frame metric evaluation on a mesh of fixed connectivity; buffers are allocated once.
@@ -38,23 +39,6 @@ pub struct SurfaceQuality {
     pub mean_abs_h: f64,
     /// Mean normal deviation from the one-ring, radians.
     pub roughness: f64,
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
 }
 
 impl SurfaceMetrics {

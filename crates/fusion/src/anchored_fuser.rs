@@ -59,6 +59,7 @@
 use std::time::Instant;
 
 use faer::Mat;
+use visage_camera::vec3::norm;
 use visage_camera::{DepthMap, Intrinsics, RigidTransform};
 use visage_fem::{
     biharmonic, cotan_laplacian, lumped_mass, mass_matrix, FusionSystem, Operators,
@@ -262,7 +263,6 @@ impl AnchoredFuser {
         self.ratios.clear();
         for i in (0..self.domain.vertex_count()).filter(|&i| self.valid[i]) {
             let t = pose.apply(self.frame_template[i]);
-            let norm = |p: [f64; 3]| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
             self.ratios.push(norm(self.raw[i]) / norm(t));
         }
         if self.ratios.is_empty() {

@@ -17,6 +17,7 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
+use visage_camera::vec3::{cross, distance, distance2, norm, sub};
 use visage_camera::RigidTransform;
 
 /// 4 mm: meant as a few times the 3-D noise of keypoints lifted at face distance (~0.5 m);
@@ -200,8 +201,7 @@ impl Pairs<'_> {
 
 /// `‖T a − b‖²`.
 fn squared_residual(t: &RigidTransform, a: [f64; 3], b: [f64; 3]) -> f64 {
-    let ta = t.apply(a);
-    (0..3).map(|k| (ta[k] - b[k]).powi(2)).sum()
+    distance2(t.apply(a), b)
 }
 
 /// The least-squares motion of the pairs `indices` (unit weights), if finite.
@@ -251,12 +251,7 @@ fn is_usable_sample(
 fn is_well_shaped(p: [[f64; 3]; 3], min_height: f64) -> bool {
     let u = sub(p[1], p[0]);
     let v = sub(p[2], p[0]);
-    let cross = [
-        u[1] * v[2] - u[2] * v[1],
-        u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0],
-    ];
-    let twice_area = norm(cross);
+    let twice_area = norm(cross(u, v));
     let longest = distance(p[0], p[1])
         .max(distance(p[0], p[2]))
         .max(distance(p[1], p[2]));
@@ -280,18 +275,6 @@ fn required_iterations(inlier_fraction: f64, confidence: f64, max: usize) -> usi
     } else {
         max
     }
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
-}
-
-fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
-    norm(sub(a, b))
 }
 
 #[cfg(test)]

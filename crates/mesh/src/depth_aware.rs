@@ -8,6 +8,8 @@
 
 use std::collections::HashMap;
 
+use visage_camera::vec3::{cross, dot, norm, sub};
+
 use crate::edge_map::{edge_key, edge_triangles};
 use crate::planar_mesh::orient2d;
 use crate::{MeshError, PlanarMesh};
@@ -44,16 +46,8 @@ impl TriangulationKind {
 }
 
 fn angle_at(c: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
-    let u = [a[0] - c[0], a[1] - c[1], a[2] - c[2]];
-    let v = [b[0] - c[0], b[1] - c[1], b[2] - c[2]];
-    let cross = [
-        u[1] * v[2] - u[2] * v[1],
-        u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0],
-    ];
-    let sin = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
-    let cos = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-    sin.atan2(cos)
+    let (u, v) = (sub(a, c), sub(b, c));
+    norm(cross(u, v)).atan2(dot(u, v))
 }
 
 fn opposite(tri: &[u32; 3], a: u32, b: u32) -> u32 {

@@ -6,24 +6,15 @@
 //! — the answer is exact, not approximate. Closest point on a triangle: Ericson, *Real-Time
 //! Collision Detection* (2005), §5.1.5.
 
-type V3 = [f64; 3];
+use visage_camera::vec3::{add, distance2, dot, scale, sub};
 
-fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn add_scaled(a: V3, s: f64, b: V3) -> V3 {
-    [a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]]
-}
+type V3 = [f64; 3];
 
 /// Squared distance from `p` to the triangle `(a, b, c)` (degenerate triangles included).
 pub fn point_triangle_distance2(p: V3, a: V3, b: V3, c: V3) -> f64 {
     let w = closest_point_barycentric(p, a, b, c);
     let q: V3 = std::array::from_fn(|i| w[0] * a[i] + w[1] * b[i] + w[2] * c[i]);
-    let d = sub(p, q);
-    dot(d, d)
+    distance2(p, q)
 }
 
 /// Barycentric coordinates `(w_a, w_b, w_c)` (non-negative, summing to 1) of the point of the
@@ -71,8 +62,8 @@ pub fn closest_point_barycentric(p: V3, a: V3, b: V3, c: V3) -> [f64; 3] {
             } else {
                 0.0
             };
-            let q = add_scaled(x, t, d);
-            (dot(sub(p, q), sub(p, q)), t)
+            let q = add(x, scale(d, t));
+            (distance2(p, q), t)
         };
         let (ab_d, ab_t) = edge(a, b);
         let (bc_d, bc_t) = edge(b, c);

@@ -31,6 +31,7 @@
 
 use faer::linalg::solvers::Solve;
 use faer::Mat;
+use visage_camera::vec3::{distance2, norm};
 use visage_mesh::point_to_mesh::closest_point_barycentric;
 
 use crate::fit::bounded_least_squares::BoxQp;
@@ -174,7 +175,7 @@ impl CanonicalCorrespondence {
         let landmark_rms_m = (src
             .iter()
             .zip(&dst)
-            .map(|(&s, d)| dist2(align(s), *d))
+            .map(|(&s, d)| distance2(align(s), *d))
             .sum::<f64>()
             / src.len() as f64)
             .sqrt();
@@ -188,7 +189,6 @@ impl CanonicalCorrespondence {
         // Mean vertex motion of each triangle under an expression at weight 1.
         let motion = |name: &str| -> Option<Vec<f64>> {
             let mode = &model.expression_modes[model.expression_index(name)?];
-            let norm = |d: [f64; 3]| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             Some(
                 triangles
                     .iter()
@@ -325,7 +325,7 @@ fn project(
             let [a, b, c] = t.map(|i| surface[i as usize]);
             let bary = closest_point_barycentric(q, a, b, c);
             let p = SurfacePoint { triangle: *t, bary };
-            let d = dist2(q, p.on(surface));
+            let d = distance2(q, p.on(surface));
             if d < best.0 {
                 best = (d, p);
             }
@@ -399,10 +399,6 @@ fn model_surface(model: &IctModel, p: &[f64], e: &[f64], out: &mut [[f64; 3]]) {
 
 /// `(s, R, t)` of `x ↦ s R x + t`.
 type Similarity = (f64, [[f64; 3]; 3], [f64; 3]);
-
-fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
-    (0..3).map(|c| (a[c] - b[c]).powi(2)).sum()
-}
 
 /// Least-squares similarity `dst ≈ s R src + t` (Umeyama 1991, Eqs. 40–42): R from the SVD of
 /// the cross-covariance with the reflection guard, `s = tr(D S) / σ²_src`.

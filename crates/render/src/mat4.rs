@@ -1,6 +1,7 @@
 //! Small fixed-size linear algebra for the transform chain: 4×4 homogeneous matrices and 3×3
 //! linear parts, row-major, `f64`.
 
+use visage_camera::vec3::normalize;
 use visage_camera::RigidTransform;
 
 /// A 4×4 homogeneous matrix, row-major (`m[row][col]`), acting on column vectors `x' = M·x`.
@@ -182,39 +183,6 @@ impl Mat3 {
         ];
         let inv = 1.0 / det;
         Some(Mat3(cof.map(|row| row.map(|c| c * inv))))
-    }
-}
-
-/// `a · b`.
-#[inline]
-pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// `a × b`.
-#[inline]
-pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// `a − b`.
-#[inline]
-pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-/// `a / ‖a‖`, or `a` unchanged when `‖a‖ = 0`.
-#[inline]
-pub fn normalize(a: [f64; 3]) -> [f64; 3] {
-    let n = dot(a, a).sqrt();
-    if n > 0.0 {
-        [a[0] / n, a[1] / n, a[2] / n]
-    } else {
-        a
     }
 }
 

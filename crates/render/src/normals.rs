@@ -1,8 +1,9 @@
 //! Vertex normals and their transformation: Eq. (6.2).
 
 use rayon::prelude::*;
+use visage_camera::vec3::{cross, normalize, sub};
 
-use crate::mat4::{cross, normalize, sub, Mat3};
+use crate::mat4::Mat3;
 use crate::simd::with_simd;
 use crate::RenderError;
 
@@ -47,6 +48,29 @@ pub fn vertex_normals(vertices: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64
 /// the face normals of those that touch it, so every vertex's sum runs over its triangles in
 /// triangle order, as in a serial scatter — the result does not depend on the split.
 pub fn vertex_normals_into(vertices: &[[f64; 3]], triangles: &[[u32; 3]], acc: &mut Vec<[f64; 3]>) {
+    by_vertex_ranges(vertices, triangles, acc, true);
+}
+
+/// The sums behind [`vertex_normals`], not normalised: `Σ_{T ∋ i} (v₁ − v₀) × (v₂ − v₀)` (twice
+/// the area-weighted normal; zero for vertices of no or only degenerate triangles), #V × 3, for
+/// callers that finish them differently (the glb's `f32` unit normals with a default for zero).
+/// The same sums, added in the same order, as [`vertex_normals`] normalises.
+///
+/// # Panics
+/// As [`vertex_normals`].
+pub fn vertex_normal_sums(vertices: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
+    let mut sums = Vec::new();
+    by_vertex_ranges(vertices, triangles, &mut sums, false);
+    sums
+}
+
+/// The sums of the face normals into `acc` (resized to #V), normalised when `unit`.
+fn by_vertex_ranges(
+    vertices: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    acc: &mut Vec<[f64; 3]>,
+    unit: bool,
+) {
     acc.clear();
     acc.resize(vertices.len(), [0.0; 3]);
     // One range per thread (every range reads all triangles), none below the minimum.
@@ -56,19 +80,21 @@ pub fn vertex_normals_into(vertices: &[[f64; 3]], triangles: &[[u32; 3]], acc: &
         .for_each(|(r, sums)| {
             with_simd(
                 #[inline(always)]
-                || range_normals(vertices, triangles, r * range_len, sums),
+                || range_normals(vertices, triangles, r * range_len, sums, unit),
             )
         });
 }
 
-/// The unit area-weighted normals of the vertices `first..first + sums.len()` into `sums`
-/// (zeros on entry): the face normals of the triangles touching the range, in triangle order.
+/// The area-weighted normals of the vertices `first..first + sums.len()` into `sums` (zeros on
+/// entry): the face normals of the triangles touching the range, in triangle order; made unit
+/// when `unit`.
 #[inline(always)]
 fn range_normals(
     vertices: &[[f64; 3]],
     triangles: &[[u32; 3]],
     first: usize,
     sums: &mut [[f64; 3]],
+    unit: bool,
 ) {
     let len = sums.len();
     // The position in `sums` of vertex `i`, if in the range.
@@ -86,8 +112,10 @@ fn range_normals(
             s[2] += n[2];
         }
     }
-    for n in sums.iter_mut() {
-        *n = normalize(*n);
+    if unit {
+        for n in sums.iter_mut() {
+            *n = normalize(*n);
+        }
     }
 }
 
@@ -97,7 +125,7 @@ const MIN_VERTEX_RANGE: usize = 4096;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mat4::dot;
+    use visage_camera::vec3::dot;
 
     #[test]
     fn normals_stay_perpendicular_under_non_uniform_scaling() {
@@ -148,7 +176,7 @@ mod tests {
         let serial = in_pool(1);
         // The baseline build (no AVX-512 or AVX2) of the one range of one thread.
         let mut baseline = vec![[0.0; 3]; v.len()];
-        range_normals(&v, &t, 0, &mut baseline);
+        range_normals(&v, &t, 0, &mut baseline, true);
         assert_eq!(serial, baseline);
         for threads in [2, 3, 8] {
             let parallel = in_pool(threads);
@@ -160,6 +188,18 @@ mod tests {
                 );
             }
         }
+        // The sums are the ones `vertex_normals` normalises, bit for bit.
+        let sums = pool_sums(&v, &t);
+        let unit: Vec<[f64; 3]> = sums.into_iter().map(normalize).collect();
+        assert_eq!(unit, serial);
+    }
+
+    fn pool_sums(v: &[[f64; 3]], t: &[[u32; 3]]) -> Vec<[f64; 3]> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        pool.install(|| vertex_normal_sums(v, t))
     }
 
     #[test]
