@@ -47,10 +47,14 @@ pub const FRAMES_FOLDER: &str = "frames";
 /// The prefix of the per-face subfolders of a run over every face (`face-1`, `face-2`, …).
 pub const FACE_FOLDER_PREFIX: &str = "face-";
 
-/// What the batch worker writes beside a clip's finished folder: its checksums.
+/// In a batch's clip folder: what was made from what, with checksums (a finished clip).
 pub const BATCH_DONE: &str = "done.json";
-/// What the batch worker writes beside a clip's failed folder: why.
+/// In a batch's clip folder: why the clip failed.
 pub const BATCH_ERROR: &str = "error.json";
+/// In a batch folder: the batch's manifest, options and shard count.
+pub const BATCH: &str = "batch.json";
+/// In a batch folder: the clips being processed, each renamed to its id when done.
+pub const BATCH_PARTIAL_FOLDER: &str = ".partial";
 
 /// The suffix of a file being written (renamed to its name once complete).
 pub const TMP_SUFFIX: &str = ".tmp";

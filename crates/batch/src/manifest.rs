@@ -8,8 +8,9 @@
 
 use std::path::{Component, Path, PathBuf};
 
-use anyhow::{bail, Context};
 use serde::Deserialize;
+
+use crate::error::{Error, IdError, ManifestError};
 
 /// One clip of the manifest.
 #[derive(Clone, Debug, PartialEq)]
@@ -23,6 +24,13 @@ pub struct Clip {
     pub input: PathBuf,
     /// `visage run` flags of this clip (its intrinsics among them).
     pub options: Vec<String>,
+}
+
+impl Clip {
+    /// The clip's own options, then the batch's `common` ones: what it is run with.
+    pub fn options_with(&self, common: &[String]) -> Vec<String> {
+        self.options.iter().chain(common).cloned().collect()
+    }
 }
 
 /// A JSON Lines entry.
@@ -40,16 +48,22 @@ struct Entry {
 
 /// Reads and checks the manifest at `path`: every line parsed, ids unique and usable as
 /// folder names. Missing inputs are not an error here (those clips fail on their own).
-pub fn read(path: &Path) -> anyhow::Result<Vec<Clip>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read the manifest", path.display()))?;
+pub fn read(path: &Path) -> Result<Vec<Clip>, Error> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::ReadManifest {
+        path: path.to_owned(),
+        source,
+    })?;
     let base = path.parent().unwrap_or(Path::new("."));
-    parse(&text, base, path.extension().is_some_and(|e| e == "jsonl"))
-        .with_context(|| format!("{}: not a usable manifest", path.display()))
+    parse(&text, base, path.extension().is_some_and(|e| e == "jsonl")).map_err(|source| {
+        Error::Manifest {
+            path: path.to_owned(),
+            source,
+        }
+    })
 }
 
 /// [`read`] of manifest text whose relative paths are relative to `base`.
-pub fn parse(text: &str, base: &Path, json_lines: bool) -> anyhow::Result<Vec<Clip>> {
+pub fn parse(text: &str, base: &Path, json_lines: bool) -> Result<Vec<Clip>, ManifestError> {
     let entries = text
         .lines()
         .enumerate()
@@ -63,13 +77,16 @@ pub fn parse(text: &str, base: &Path, json_lines: bool) -> anyhow::Result<Vec<Cl
         }
         let entry = if json {
             serde_json::from_str::<Entry>(l)
-                .with_context(|| format!("line {line}: not a JSON object with \"input\""))?
+                .map_err(|source| ManifestError::NotJson { line, source })?
         } else {
             let mut fields = l.split('\t').map(str::trim);
             let input = fields.next().unwrap_or_default().to_owned();
             let intrinsics = fields.next().filter(|f| !f.is_empty()).map(str::to_owned);
             if let Some(extra) = fields.next() {
-                bail!("line {line}: {extra:?} after the intrinsics (a line is PATH or PATH<TAB>INTRINSICS)");
+                return Err(ManifestError::ExtraField {
+                    line,
+                    extra: extra.to_owned(),
+                });
             }
             Entry {
                 input,
@@ -79,19 +96,21 @@ pub fn parse(text: &str, base: &Path, json_lines: bool) -> anyhow::Result<Vec<Cl
             }
         };
         if entry.input.is_empty() {
-            bail!("line {line}: no input path");
+            return Err(ManifestError::NoInput { line });
         }
         let id = match entry.id {
             Some(id) => id,
             None => default_id(&entry.input),
         };
-        check_id(&id).with_context(|| format!("line {line}: {id:?} cannot name a folder"))?;
+        if let Err(source) = check_id(&id) {
+            return Err(ManifestError::BadId { line, id, source });
+        }
         if let Some(other) = clips.iter().find(|c| c.id == id) {
-            bail!(
-                "lines {} and {line} both name the clip {id:?} (their output folder); give one \
-                 an \"id\" (JSON Lines) or rename a file",
-                other.line
-            );
+            return Err(ManifestError::DuplicateId {
+                first: other.line,
+                line,
+                id,
+            });
         }
         let mut options = entry.options;
         if let Some(k) = entry.intrinsics {
@@ -108,7 +127,7 @@ pub fn parse(text: &str, base: &Path, json_lines: bool) -> anyhow::Result<Vec<Cl
         });
     }
     if clips.is_empty() {
-        bail!("no clips (one input path per line)");
+        return Err(ManifestError::NoClips);
     }
     Ok(clips)
 }
@@ -130,13 +149,15 @@ fn default_id(input: &str) -> String {
 
 /// An id is a relative path of plain names: no `..`, no hidden names (the batch's own files
 /// start with a dot).
-fn check_id(id: &str) -> anyhow::Result<()> {
+fn check_id(id: &str) -> Result<(), IdError> {
     if id.is_empty() {
-        bail!("an empty name");
+        return Err(IdError::Empty);
     }
     for part in id.split('/') {
         if part.is_empty() || part == "." || part == ".." || part.starts_with('.') {
-            bail!("{part:?} is not a plain folder name (the id is a relative path of names that do not start with a dot)");
+            return Err(IdError::NotPlain {
+                part: part.to_owned(),
+            });
         }
     }
     Ok(())
@@ -176,7 +197,7 @@ mod tests {
 
     #[test]
     fn bad_manifests_name_the_line() {
-        let err = |t: &str| format!("{:#}", parse(t, Path::new("."), false).unwrap_err());
+        let err = |t: &str| visage::error_chain(&parse(t, Path::new("."), false).unwrap_err());
         assert!(err("a.mp4\na.mov\n").contains("lines 1 and 2 both name the clip \"a\""));
         assert!(err("../x.mp4\n").contains("line 1"));
         assert!(err("{\"input\": \"a\"}\n{\"inptu\": \"b\"}\n").contains("line 2"));

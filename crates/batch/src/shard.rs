@@ -11,15 +11,16 @@
 //! `AWS_BATCH_JOB_ARRAY_SIZE`), or `VISAGE_SHARD_INDEX` / `VISAGE_SHARD_COUNT`; without any,
 //! one shard holds every clip.
 
-use anyhow::{bail, Context};
+use crate::error::Error;
 
 /// A worker's shard: `index` of `count`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Shard {
+    /// From 0, below `count`.
     pub index: usize,
+    /// At least 1.
     pub count: usize,
     /// Where the index came from (a flag or the scheduler's variable), for the log.
-    #[serde(skip)]
     pub source: &'static str,
 }
 
@@ -27,6 +28,77 @@ impl Shard {
     /// Whether the clip named `id` is this shard's.
     pub fn owns(&self, id: &str) -> bool {
         shard_of(id, self.count) == self.index
+    }
+
+    /// The shard from the flags (`--shard-index`, `--shard-count`), else from the
+    /// scheduler's variables (`var` reads one; see the module docs).
+    pub fn resolve(
+        index: Option<usize>,
+        count: Option<usize>,
+        var: impl Fn(&str) -> Option<String>,
+    ) -> Result<Shard, Error> {
+        let num = |name: &str| -> Result<Option<usize>, Error> {
+            var(name)
+                .map(|v| {
+                    v.trim()
+                        .parse::<usize>()
+                        .map_err(|source| Error::NotANumber {
+                            name: name.to_owned(),
+                            value: v.clone(),
+                            source,
+                        })
+                })
+                .transpose()
+        };
+        let count_from_env = || -> Result<Option<usize>, Error> {
+            Ok(match count {
+                Some(n) => Some(n),
+                None => num("VISAGE_SHARD_COUNT")?,
+            })
+        };
+        let (index, count, source) = if let Some(i) = index {
+            let n = count.ok_or(Error::IndexWithoutCount)?;
+            (i, n, "--shard-index")
+        } else if let Some(id) = num("SLURM_ARRAY_TASK_ID")? {
+            let min = num("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
+            let n = match count {
+                Some(n) => n,
+                None => num("SLURM_ARRAY_TASK_COUNT")?.ok_or(Error::SlurmCountMissing)?,
+            };
+            if id < min {
+                return Err(Error::SlurmIdBelowMin { id, min });
+            }
+            (id - min, n, "$SLURM_ARRAY_TASK_ID")
+        } else if let Some(i) = num("JOB_COMPLETION_INDEX")? {
+            let n = count_from_env()?.ok_or(Error::KubernetesCountMissing)?;
+            (i, n, "$JOB_COMPLETION_INDEX")
+        } else if let Some(i) = num("AWS_BATCH_JOB_ARRAY_INDEX")? {
+            let n = match count {
+                Some(n) => n,
+                None => num("AWS_BATCH_JOB_ARRAY_SIZE")?.ok_or(Error::AwsCountMissing)?,
+            };
+            (i, n, "$AWS_BATCH_JOB_ARRAY_INDEX")
+        } else if let Some(i) = num("VISAGE_SHARD_INDEX")? {
+            let n = count_from_env()?.ok_or(Error::VisageCountMissing)?;
+            (i, n, "$VISAGE_SHARD_INDEX")
+        } else {
+            (0, count.unwrap_or(1), "default")
+        };
+        if count == 0 {
+            return Err(Error::ZeroShards { from: source });
+        }
+        if index >= count {
+            return Err(Error::IndexNotBelowCount {
+                index,
+                from: source,
+                count,
+            });
+        }
+        Ok(Shard {
+            index,
+            count,
+            source,
+        })
     }
 }
 
@@ -39,76 +111,6 @@ pub fn shard_of(id: &str, count: usize) -> usize {
 pub fn fnv1a64(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
         (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
-}
-
-/// The shard from the flags, else from the environment (`var` reads a variable).
-pub fn resolve(
-    index: Option<usize>,
-    count: Option<usize>,
-    var: impl Fn(&str) -> Option<String>,
-) -> anyhow::Result<Shard> {
-    let num = |name: &str| -> anyhow::Result<Option<usize>> {
-        var(name)
-            .map(|v| {
-                v.trim()
-                    .parse::<usize>()
-                    .with_context(|| format!("${name} = {v:?} is not a whole number"))
-            })
-            .transpose()
-    };
-    let count_from_env = || -> anyhow::Result<Option<usize>> {
-        Ok(match count {
-            Some(n) => Some(n),
-            None => num("VISAGE_SHARD_COUNT")?,
-        })
-    };
-    let (index, count, source) = if let Some(i) = index {
-        let n = count.with_context(|| "--shard-index needs --shard-count".to_owned())?;
-        (i, n, "--shard-index")
-    } else if let Some(id) = num("SLURM_ARRAY_TASK_ID")? {
-        let min = num("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
-        let n = match count {
-            Some(n) => n,
-            None => num("SLURM_ARRAY_TASK_COUNT")?
-                .context("$SLURM_ARRAY_TASK_ID is set but $SLURM_ARRAY_TASK_COUNT is not")?,
-        };
-        if id < min {
-            bail!("$SLURM_ARRAY_TASK_ID = {id} is below $SLURM_ARRAY_TASK_MIN = {min}");
-        }
-        (id - min, n, "$SLURM_ARRAY_TASK_ID")
-    } else if let Some(i) = num("JOB_COMPLETION_INDEX")? {
-        let n = count_from_env()?.context(
-            "$JOB_COMPLETION_INDEX is set (a Kubernetes Indexed Job) but the shard count is not: \
-             pass --shard-count or set $VISAGE_SHARD_COUNT to the job's completions",
-        )?;
-        (i, n, "$JOB_COMPLETION_INDEX")
-    } else if let Some(i) = num("AWS_BATCH_JOB_ARRAY_INDEX")? {
-        let n = match count {
-            Some(n) => n,
-            None => num("AWS_BATCH_JOB_ARRAY_SIZE")?.context(
-                "$AWS_BATCH_JOB_ARRAY_INDEX is set but $AWS_BATCH_JOB_ARRAY_SIZE is not",
-            )?,
-        };
-        (i, n, "$AWS_BATCH_JOB_ARRAY_INDEX")
-    } else if let Some(i) = num("VISAGE_SHARD_INDEX")? {
-        let n = count_from_env()?.context(
-            "$VISAGE_SHARD_INDEX is set but neither --shard-count nor $VISAGE_SHARD_COUNT",
-        )?;
-        (i, n, "$VISAGE_SHARD_INDEX")
-    } else {
-        (0, count.unwrap_or(1), "default")
-    };
-    if count == 0 {
-        bail!("the shard count is 0 (from {source}); it must be at least 1");
-    }
-    if index >= count {
-        bail!("shard index {index} (from {source}) is not below the shard count {count}; indices run from 0");
-    }
-    Ok(Shard {
-        index,
-        count,
-        source,
     })
 }
 
@@ -160,32 +162,34 @@ mod tests {
 
     #[test]
     fn the_schedulers_variables() {
-        let s = resolve(None, None, env(&[])).unwrap();
+        let s = Shard::resolve(None, None, env(&[])).unwrap();
         assert_eq!((s.index, s.count), (0, 1));
-        let s = resolve(Some(2), Some(5), env(&[("SLURM_ARRAY_TASK_ID", "0")])).unwrap();
+        let s = Shard::resolve(Some(2), Some(5), env(&[("SLURM_ARRAY_TASK_ID", "0")])).unwrap();
         assert_eq!((s.index, s.count), (2, 5));
         let slurm = [
             ("SLURM_ARRAY_TASK_ID", "3"),
             ("SLURM_ARRAY_TASK_MIN", "1"),
             ("SLURM_ARRAY_TASK_COUNT", "4"),
         ];
-        let s = resolve(None, None, env(&slurm)).unwrap();
+        let s = Shard::resolve(None, None, env(&slurm)).unwrap();
         assert_eq!((s.index, s.count), (2, 4));
         let k8s = [("JOB_COMPLETION_INDEX", "1"), ("VISAGE_SHARD_COUNT", "3")];
-        let s = resolve(None, None, env(&k8s)).unwrap();
+        let s = Shard::resolve(None, None, env(&k8s)).unwrap();
         assert_eq!((s.index, s.count), (1, 3));
-        let s = resolve(None, Some(8), env(&k8s[..1])).unwrap();
+        let s = Shard::resolve(None, Some(8), env(&k8s[..1])).unwrap();
         assert_eq!((s.index, s.count), (1, 8));
         let aws = [
             ("AWS_BATCH_JOB_ARRAY_INDEX", "0"),
             ("AWS_BATCH_JOB_ARRAY_SIZE", "2"),
         ];
-        assert_eq!(resolve(None, None, env(&aws)).unwrap().count, 2);
+        assert_eq!(Shard::resolve(None, None, env(&aws)).unwrap().count, 2);
     }
 
     #[test]
     fn bad_shards_say_why() {
-        let err = |i, n, e: &[(&str, &str)]| format!("{:#}", resolve(i, n, env(e)).unwrap_err());
+        let err = |i, n, e: &[(&str, &str)]| {
+            visage::error_chain(&Shard::resolve(i, n, env(e)).unwrap_err())
+        };
         assert!(err(Some(1), None, &[]).contains("--shard-count"));
         assert!(err(Some(4), Some(4), &[]).contains("not below the shard count 4"));
         assert!(err(None, None, &[("JOB_COMPLETION_INDEX", "0")]).contains("VISAGE_SHARD_COUNT"));

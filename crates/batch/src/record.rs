@@ -1,37 +1,42 @@
 //! What a clip's folder says about it: `done.json` (what was made from what, with checksums)
-//! or `error.json` (why it failed).
+//! or `error.json` (why it failed), and the checks that decide whether a clip is done.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
+use visage_run_folder::file_names;
+
+use crate::error::Error;
 
 /// The record of a finished clip.
-pub const DONE: &str = "done.json";
+pub const DONE: &str = file_names::BATCH_DONE;
 /// The record of a failed clip.
-pub const ERROR: &str = "error.json";
+pub const ERROR: &str = file_names::BATCH_ERROR;
 
 /// An input or output file: size and SHA-256.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct FileSum {
+    /// The size in bytes.
     pub bytes: u64,
+    /// The SHA-256 digest, 64 lowercase hex digits.
     pub sha256: String,
 }
 
 impl FileSum {
     /// Reads `path` through once.
-    pub fn of(path: &Path) -> anyhow::Result<Self> {
-        let mut file = std::fs::File::open(path)
-            .with_context(|| format!("{}: cannot read", path.display()))?;
+    pub fn of(path: &Path) -> Result<Self, Error> {
+        let cannot_read = |source| Error::Read {
+            path: path.to_owned(),
+            source,
+        };
+        let mut file = std::fs::File::open(path).map_err(cannot_read)?;
         let mut hasher = Sha256::new();
         let mut buf = vec![0u8; 1 << 20];
         let mut bytes = 0u64;
         loop {
-            let n = file
-                .read(&mut buf)
-                .with_context(|| format!("{}: cannot read", path.display()))?;
+            let n = file.read(&mut buf).map_err(cannot_read)?;
             if n == 0 {
                 break;
             }
@@ -54,11 +59,13 @@ pub struct Done {
     pub clip: String,
     /// The input as the manifest resolved it.
     pub input: PathBuf,
+    /// The input's size and SHA-256.
     pub input_file: FileSum,
     /// Seconds since the Unix epoch of the input's modification time when it was hashed.
     pub input_modified_s: Option<f64>,
     /// The `visage run` options the clip was processed with (the manifest's, then the batch's).
     pub options: Vec<String>,
+    /// The version of visage that made the outputs.
     pub visage_version: String,
     /// Frames processed and frames meshed (metrics.json's summary).
     pub frames: u64,
@@ -72,13 +79,17 @@ pub struct Done {
 /// `error.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Failed {
+    /// The clip's id.
     pub clip: String,
+    /// The input as the manifest resolved it.
     pub input: PathBuf,
     /// The exit code `visage run` would have given: 2 bad input, 3 no face, 1 internal.
     pub exit_code: u8,
     /// What went wrong, the whole chain of causes.
     pub error: String,
+    /// The `visage run` options the clip was run with.
     pub options: Vec<String>,
+    /// The version of visage that ran it.
     pub visage_version: String,
 }
 
@@ -89,14 +100,16 @@ pub fn modified_s(path: &Path) -> Option<f64> {
 }
 
 /// Every file under `dir` but the records, by `/`-separated path relative to it, with sums.
-pub fn output_sums(dir: &Path) -> anyhow::Result<std::collections::BTreeMap<String, FileSum>> {
+pub fn output_sums(dir: &Path) -> Result<std::collections::BTreeMap<String, FileSum>, Error> {
     let mut sums = std::collections::BTreeMap::new();
     let mut stack = vec![dir.to_owned()];
     while let Some(d) = stack.pop() {
-        for entry in
-            std::fs::read_dir(&d).with_context(|| format!("{}: cannot list", d.display()))?
-        {
-            let path = entry?.path();
+        let entries = std::fs::read_dir(&d).map_err(|source| Error::List {
+            path: d.clone(),
+            source,
+        })?;
+        for entry in entries {
+            let path = entry.map_err(Error::Io)?.path();
             if path.is_dir() {
                 stack.push(path);
                 continue;

@@ -1,13 +1,16 @@
-//! `visage batch status`: done, failed and missing clips of a batch folder, per shard.
+//! The status of a batch folder (`visage batch status`): done, failed and missing clips per
+//! shard, the failures' first lines, the missing ids, and the folders in progress.
 
 use std::path::Path;
 
 use serde::Serialize;
 
-use super::manifest::Clip;
-use super::record;
-use super::shard::shard_of;
-use super::worker::PARTIAL;
+use crate::batch_record::BatchRecord;
+use crate::error::Error;
+use crate::manifest::{self, Clip};
+use crate::record;
+use crate::shard::shard_of;
+use crate::worker::PARTIAL;
 
 /// One clip's state in the batch folder.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -24,7 +27,7 @@ pub enum State {
 /// The state of `clip` under `out`, with the batch's `common` options.
 pub fn state(out: &Path, clip: &Clip, common: &[String]) -> State {
     let folder = out.join(&clip.id);
-    let options = super::worker::options_of(clip, common);
+    let options = clip.options_with(common);
     if record::not_done(&folder, &clip.input, &options).is_none() {
         State::Done
     } else if folder.join(record::ERROR).is_file() {
@@ -37,7 +40,9 @@ pub fn state(out: &Path, clip: &Clip, common: &[String]) -> State {
 /// Counts of one shard.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct ShardStatus {
+    /// The shard's index.
     pub shard: usize,
+    /// Its clips, and of them the done, failed and missing ones.
     pub clips: usize,
     pub done: usize,
     pub failed: usize,
@@ -51,6 +56,7 @@ pub struct ShardStatus {
 /// The whole batch folder.
 #[derive(Clone, Debug, Serialize)]
 pub struct BatchStatus {
+    /// Every shard, by index.
     pub shards: Vec<ShardStatus>,
     /// Folders under `.partial/`: clips being processed now, or left by killed workers (the
     /// next worker of their shard removes them).
@@ -58,6 +64,35 @@ pub struct BatchStatus {
 }
 
 impl BatchStatus {
+    /// The status of the batch folder `dir`: its clips from `manifest`, else from the
+    /// manifest the workers recorded in `dir/batch.json`; in `shard_count` shards, else as
+    /// recorded, else 1.
+    pub fn read(
+        dir: &Path,
+        manifest: Option<&Path>,
+        shard_count: Option<usize>,
+    ) -> Result<BatchStatus, Error> {
+        let recorded = BatchRecord::read(dir);
+        let manifest_path = match (manifest, &recorded) {
+            (Some(m), _) => m.to_owned(),
+            (None, Some(r)) => r.manifest.clone(),
+            (None, None) => {
+                return Err(Error::NoBatchRecord {
+                    dir: dir.to_owned(),
+                })
+            }
+        };
+        let clips = manifest::read(&manifest_path)?;
+        let shard_count = shard_count
+            .or(recorded.as_ref().map(|r| r.shard_count))
+            .unwrap_or(1);
+        if shard_count == 0 {
+            return Err(Error::ZeroShardCount);
+        }
+        let common = recorded.map(|r| r.options).unwrap_or_default();
+        Ok(BatchStatus::of(dir, &clips, shard_count, &common))
+    }
+
     /// The summary of `clips` in `shard_count` shards under `out`.
     pub fn of(out: &Path, clips: &[Clip], shard_count: usize, common: &[String]) -> Self {
         let mut shards: Vec<ShardStatus> = (0..shard_count)
@@ -153,4 +188,48 @@ fn failure_reason(out: &Path, clip: &Clip) -> String {
             || "error.json does not parse".into(),
             |f| f.error.lines().next().unwrap_or_default().to_owned(),
         )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn missing_failed_and_the_recorded_manifest() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("out");
+        let err = visage::error_chain(&BatchStatus::read(&out, None, None).unwrap_err());
+        assert!(err.ends_with("no batch.json (no worker has started there); pass --manifest"));
+        let manifest = tmp.path().join("m.txt");
+        std::fs::write(&manifest, "a.mp4\nb.mp4\nc.mp4\n").unwrap();
+        std::fs::create_dir_all(out.join("b")).unwrap();
+        let failed = record::Failed {
+            clip: "b".into(),
+            input: tmp.path().join("b.mp4"),
+            exit_code: 3,
+            error: "no face in any frame\nsecond line".into(),
+            options: Vec::new(),
+            visage_version: "0".into(),
+        };
+        let json = serde_json::to_string(&failed).unwrap();
+        std::fs::write(out.join("b").join(record::ERROR), json).unwrap();
+        BatchRecord {
+            manifest: manifest.clone(),
+            shard_count: 1,
+            options: Vec::new(),
+        }
+        .write(&out)
+        .unwrap();
+        let s = BatchStatus::read(&out, None, None).unwrap();
+        assert_eq!((s.missing(), s.failed(), s.shards.len()), (2, 1, 1));
+        let table = s.table();
+        assert!(
+            table.contains("failed  (shard 0) b: no face in any frame\n"),
+            "{table}"
+        );
+        assert!(table.contains("missing (shard 0) a\n"), "{table}");
+        let s = BatchStatus::read(&out, Some(&manifest), Some(3)).unwrap();
+        assert_eq!(s.shards.iter().map(|s| s.clips).sum::<usize>(), 3);
+        assert!(BatchStatus::read(&out, None, Some(0)).is_err());
+    }
 }
