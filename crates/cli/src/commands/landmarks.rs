@@ -7,12 +7,9 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Args;
 use serde_json::json;
-use visage::check_fov;
-use visage::run_folder::{FaceRecord, LandmarksFrame};
+use visage::{check_fov, LandmarkReader};
 use visage_camera::{write_depth_png, DepthKind, Intrinsics, DEFAULT_FOV_DEG};
-use visage_face::{
-    fit_face_geometry, model_files, render_faces_depth, CanonicalMesh, Face, FaceMesh, FaceTracker,
-};
+use visage_face::{model_files, render_faces_depth};
 use visage_video::{is_image_path, FrameSource};
 
 /// Arguments of `visage landmarks`.
@@ -56,24 +53,17 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
         .transpose()
         .context("cannot use --intrinsics")?;
     let models = args.models.clone().unwrap_or_else(model_files::models_dir);
-    let mesh = FaceMesh::load(&models)?;
-    let canonical = CanonicalMesh::load(&models)?;
+    let every_face = args.faces == crate::commands::run::FacesArg::All;
+    let mut reader = LandmarkReader::load(&models, every_face)?;
     if let Some(dir) = &args.depth_out {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
     let mut frames_json = Vec::new();
     let mut frame_counter = 0usize;
     let mut faces_found = 0usize;
-    let mut tracker = FaceTracker::new(mesh);
     for input in &args.inputs {
         let still = input.is_file() && is_image_path(input);
-        tracker.reset();
-        // `--faces all`: both detectors, near and far faces merged.
-        tracker.mesh.detectors = if args.faces == crate::commands::run::FacesArg::All {
-            visage_face::DetectorUse::Both
-        } else {
-            visage_face::DetectorUse::FallBack
-        };
+        reader.start();
         let source = FrameSource::open(input)?;
         for frame in source {
             let frame = frame?;
@@ -86,51 +76,27 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
                 }
                 None => Intrinsics::from_fov(w, h, fov)?,
             };
-            let faces: Vec<Face> = if still || args.faces == crate::commands::run::FacesArg::All {
-                tracker.mesh.process(&frame.image)?
-            } else {
-                tracker.track(&frame.image)?.face.into_iter().collect()
-            };
-            if faces.is_empty() {
-                eprintln!("warning: {}: no face found", frame.source);
+            let faces = reader.read(frame, &k, still)?;
+            for warning in &faces.warnings {
+                eprintln!("warning: {warning}");
             }
-            faces_found += faces.len();
-            let mut records = Vec::new();
-            let mut geometries = Vec::new();
-            for face in &faces {
-                match fit_face_geometry(&canonical, &face.landmarks.points, &k) {
-                    Ok(g) => {
-                        records.push(FaceRecord::new(face, Some(&g)));
-                        geometries.push(g);
-                    }
-                    Err(e) => {
-                        eprintln!("warning: {}: no metric fit: {e}", frame.source);
-                        records.push(FaceRecord::new(face, None));
-                    }
-                }
-            }
+            faces_found += faces.record.faces.len();
             if let Some(dir) = &args.depth_out {
-                let depth = render_faces_depth(&geometries, &canonical, &k, DepthKind::Z)?;
+                let depth =
+                    render_faces_depth(&faces.geometries, reader.canonical(), &k, DepthKind::Z)?;
                 let path = dir.join(format!("depth_{frame_counter:06}.png"));
                 write_depth_png(&path, &depth, 1000.0)
                     .with_context(|| format!("cannot write {}", path.display()))?;
             }
-            frames_json.push(LandmarksFrame {
-                source: frame.source,
-                index: frame.index,
-                width: w,
-                height: h,
-                faces: records,
-            });
+            frames_json.push(faces.record);
             frame_counter += 1;
         }
     }
-    if tracker.frames > 0 {
+    let (tracked, detector_runs) = reader.tracking();
+    if tracked > 0 {
         eprintln!(
-            "tracked {} video frames, detector ran on {} ({:.1}%)",
-            tracker.frames,
-            tracker.detector_runs,
-            100.0 * tracker.detector_runs as f64 / tracker.frames as f64
+            "tracked {tracked} video frames, detector ran on {detector_runs} ({:.1}%)",
+            100.0 * detector_runs as f64 / tracked as f64
         );
     }
     let doc = json!({ "frames": frames_json });
