@@ -27,6 +27,12 @@ pub enum DepthError {
     /// The runtime failed to prepare or run the network.
     #[error("{}: {reason}", path.display())]
     Runtime { path: PathBuf, reason: String },
+    /// A depth folder holds no PNG.
+    #[error("{}: no PNG depth frames found", dir.display())]
+    NoFrames { dir: PathBuf },
+    /// Depth units per metre that are not a positive finite number.
+    #[error("invalid option depth-scale = {value}: must be positive and finite")]
+    DepthScale { value: f64 },
     /// An RGB-D recording's folder or lists are not usable.
     #[error("{}: {reason}", path.display())]
     Recording { path: PathBuf, reason: String },

@@ -5,6 +5,7 @@
 //!   normalisation, what the output means). Outputs known only up to a scale and shift per
 //!   frame — relative depth, inverse depth, disparity — are aligned to the metric face by a
 //!   robust fit in their own space ([`align`]).
+//! - **Depth folders** ([`DepthSequence`]): 16-bit PNG maps, one per frame in name order.
 //! - **RGB-D recordings** ([`RgbdRecording`]): the TUM RGB-D layout or a pair of `rgb/` and
 //!   `depth/` folders, colour and depth associated by timestamp, depth registered to the
 //!   colour camera, holes and flying pixels at depth edges masked.
@@ -16,6 +17,7 @@
 mod alignment;
 mod depth_edges;
 mod depth_network;
+mod depth_sequence;
 mod error;
 mod network_config;
 mod prediction;
@@ -25,6 +27,7 @@ mod rgbd_recording;
 pub use alignment::{align, Alignment, AlignmentFailure, AlignmentOptions};
 pub use depth_edges::{mask_depth_edges, EdgeMask};
 pub use depth_network::DepthNetwork;
+pub use depth_sequence::DepthSequence;
 pub use error::DepthError;
 pub use network_config::{
     AlignMode, ColorOrder, InputSpec, Layout, NetworkConfig, NetworkRegion, OutputKind, OutputSpec,

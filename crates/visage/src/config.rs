@@ -5,12 +5,12 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 use visage_camera::{Intrinsics, DEFAULT_FOV_DEG};
-use visage_depth::{DepthNetwork, RgbdRecording};
+use visage_depth::{DepthNetwork, DepthSequence, RgbdRecording};
 use visage_face::FaceTarget;
 use visage_fem::{ClipOptions, Weights};
 use visage_fusion::{
-    DepthSequence, FusionParams, MeshKind, MeshingOptions, ANCHORED_WEIGHTS_FACE,
-    ANCHORED_WEIGHTS_MAP, DEFAULT_MAX_DEPTH_M, MODEL_WEIGHTS_MAP,
+    FusionParams, MeshKind, MeshingOptions, ANCHORED_WEIGHTS_FACE, ANCHORED_WEIGHTS_MAP,
+    DEFAULT_MAX_DEPTH_M, MODEL_WEIGHTS_MAP,
 };
 
 use visage_morphable::{FaceModel, FitOptions};

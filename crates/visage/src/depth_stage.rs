@@ -7,9 +7,8 @@ use std::time::Instant;
 
 use image::RgbImage;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
-use visage_depth::{align, AlignmentOptions, DepthNetwork, RgbdRecording};
+use visage_depth::{align, AlignmentOptions, DepthNetwork, DepthSequence, RgbdRecording};
 use visage_face::{render_faces_depth, render_surface_depth, CanonicalMesh};
-use visage_fusion::DepthSequence;
 use visage_mesh::TriMesh;
 
 use crate::metrics::DepthAlignmentMetrics;

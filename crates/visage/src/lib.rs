@@ -123,12 +123,12 @@ pub use stages::Surfaces;
 
 pub use visage_camera::{DepthKind, Intrinsics, RigidTransform, DEFAULT_FOV_DEG};
 pub use visage_depth::{
-    AlignMode, DepthNetwork, EdgeMask, NetworkConfig, NetworkRegion, OutputKind, Registration,
-    RgbdLayout, RgbdOptions, RgbdRecording,
+    AlignMode, DepthNetwork, DepthSequence, EdgeMask, NetworkConfig, NetworkRegion, OutputKind,
+    Registration, RgbdLayout, RgbdOptions, RgbdRecording,
 };
 pub use visage_face::FaceTarget;
 pub use visage_fem::{ClipOptions, Weights};
-pub use visage_fusion::{DepthSequence, MeshKind, MeshingOptions, DEFAULT_MAX_DEPTH_M};
+pub use visage_fusion::{MeshKind, MeshingOptions, DEFAULT_MAX_DEPTH_M};
 pub use visage_mesh::io::{write_ply, PlyFormat};
 pub use visage_mesh::{TriMesh, TriangulationKind};
 pub use visage_morphable::{FaceModel, FitOptions};
