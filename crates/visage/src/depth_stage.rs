@@ -8,9 +8,10 @@ use std::time::Instant;
 use image::RgbImage;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_depth::{align, AlignmentOptions, DepthNetwork, DepthSequence, RgbdRecording};
-use visage_face::{render_faces_depth, render_surface_depth, CanonicalMesh};
+use visage_face::CanonicalMesh;
 use visage_mesh::TriMesh;
 
+use crate::face_depth::{render_faces_depth, render_surface_depth};
 use crate::metrics::DepthAlignmentMetrics;
 use crate::stages::Tracked;
 use crate::Error;

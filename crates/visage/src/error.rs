@@ -32,6 +32,9 @@ pub enum Error {
     Solver(#[from] FemError),
     #[error(transparent)]
     Model(#[from] visage_morphable::MorphableError),
+    /// Rasterising the fitted face or model into a depth map failed.
+    #[error("cannot render the face depth: {reason}")]
+    Render { reason: String },
     /// A depth network or RGB-D recording failed (the cause names the file).
     #[error(transparent)]
     Depth(Box<visage_depth::DepthError>),

@@ -50,6 +50,7 @@ mod config;
 mod depth_folder;
 mod depth_stage;
 mod error;
+mod face_depth;
 mod gaze;
 mod histogram;
 mod input;
@@ -87,6 +88,7 @@ pub use config::{
 };
 pub use depth_folder::{fuse_depth_folder, FuseOptions};
 pub use error::Error;
+pub use face_depth::{render_faces_depth, render_surface_depth};
 pub use gaze::{eye_gaze, eye_look_weights, EyeGaze};
 pub use input::{FrameSelection, Input, KeptFrames};
 pub use keypoint_motion::{

@@ -11,8 +11,7 @@ use image::RgbImage;
 use visage_camera::RigidTransform;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_face::{
-    fit_face_geometry, render_faces_depth, render_surface_depth, CanonicalMesh, Eye, Eyes, Face,
-    FaceGeometry, FaceTracker, IrisLandmarker,
+    fit_face_geometry, CanonicalMesh, Eye, Eyes, Face, FaceGeometry, FaceTracker, IrisLandmarker,
 };
 use visage_fusion::{ClipFrame, FaceFrame, FusedSurfaces, MeshKind, ModelFrame, SurfaceFusion};
 use visage_mesh::TriMesh;
@@ -23,6 +22,7 @@ use visage_morphable::FaceModel;
 use visage_video::Frame;
 
 use crate::animation::{live_link_angles, BlendshapeFrame, IctToArkit, ARKIT_BLENDSHAPES};
+use crate::face_depth::{render_faces_depth, render_surface_depth};
 use crate::gaze::{eye_gaze, eye_look_weights, EyeGaze};
 use crate::landmark_smoothing::{DistanceSmoother, LandmarkSmoother};
 use crate::landmarks::{FaceRecord, LandmarksFrame};

@@ -7,11 +7,9 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Args;
 use serde_json::json;
-use visage::{check_fov, FaceRecord, LandmarksFrame};
+use visage::{check_fov, render_faces_depth, FaceRecord, LandmarksFrame};
 use visage_camera::{write_depth_png, DepthKind, Intrinsics, DEFAULT_FOV_DEG};
-use visage_face::{
-    fit_face_geometry, model_files, render_faces_depth, CanonicalMesh, Face, FaceMesh, FaceTracker,
-};
+use visage_face::{fit_face_geometry, model_files, CanonicalMesh, Face, FaceMesh, FaceTracker};
 use visage_video::{is_image_path, FrameSource};
 
 /// Arguments of `visage landmarks`.
