@@ -1,10 +1,11 @@
-//! A folder of 16-bit PNG depth maps, one per frame in name order: listing and reading.
+//! A folder of 16-bit PNG depth maps, one per frame in name order: listing and reading, and
+//! the folder as a depth source (the i-th file for input frame i).
 
 use std::path::{Path, PathBuf};
 
 use visage_camera::{read_depth_png, DepthKind, DepthMap};
 
-use crate::DepthError;
+use crate::{DepthError, DepthProvider, DepthRequest, ProvidedDepth};
 
 /// The frames of a depth sequence, in name order.
 #[derive(Clone, Debug, PartialEq)]
@@ -70,9 +71,34 @@ impl DepthSequence {
     }
 }
 
+impl DepthProvider for DepthSequence {
+    /// The folder.
+    fn describe(&self) -> String {
+        self.dir.display().to_string()
+    }
+
+    /// The file of input frame `request.index`, checked against the camera.
+    fn depth_map(&mut self, request: DepthRequest<'_>) -> Result<ProvidedDepth, DepthError> {
+        let index = request.index;
+        if index >= self.frames.len() {
+            return Err(DepthError::MissingFrame {
+                dir: self.dir.clone(),
+                frames: self.frames.len(),
+                index,
+            });
+        }
+        let map = self.read(index)?;
+        request.k.check_size(map.width, map.height).map_err(|e| {
+            DepthError::on_frame(&self.frames[index].display().to_string(), "depth frame", e)
+        })?;
+        Ok(ProvidedDepth::read(map))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use visage_camera::Intrinsics;
 
     #[test]
     fn lists_the_pngs_in_name_order_and_refuses_a_bad_scale() {
@@ -96,6 +122,48 @@ mod tests {
         assert!(
             none.to_string().ends_with(": no PNG depth frames found"),
             "{none}"
+        );
+    }
+
+    #[test]
+    fn as_a_provider_it_gives_frame_i_the_i_th_file_of_the_camera_s_size() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut map = DepthMap::empty(4, 3, DepthKind::Z);
+        map.data[5] = 0.5;
+        for name in ["0.png", "1.png"] {
+            visage_camera::write_depth_png(&dir.path().join(name), &map, 1000.0).unwrap();
+        }
+        let mut seq = DepthSequence::open(dir.path(), 1000.0, DepthKind::Z).unwrap();
+        let request = |index, k| DepthRequest {
+            index,
+            source: "clip.mp4#1",
+            image: None,
+            k,
+            face_box: [0.0; 4],
+            reference: None,
+            max_depth: 4.0,
+        };
+        let k = Intrinsics::new(4, 3, 4.0, 4.0, 1.5, 1.0).unwrap();
+        assert_eq!(
+            seq.depth_map(request(1, &k)).unwrap(),
+            ProvidedDepth::read(map)
+        );
+        let missing = seq.depth_map(request(2, &k)).unwrap_err();
+        assert_eq!(
+            missing.to_string(),
+            format!(
+                "{}: holds 2 depth frames; input frame 2 has none",
+                dir.path().display()
+            )
+        );
+        let other = Intrinsics::new(8, 6, 8.0, 8.0, 3.5, 2.5).unwrap();
+        let DepthError::Frame { frame, step, .. } = seq.depth_map(request(0, &other)).unwrap_err()
+        else {
+            panic!("a map of another size than the camera's names its file");
+        };
+        assert_eq!(
+            (frame.as_str(), step),
+            (seq.frames[0].to_str().unwrap(), "depth frame")
         );
     }
 }

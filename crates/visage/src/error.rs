@@ -35,7 +35,7 @@ pub enum Error {
     /// Rasterising the fitted face or model into a depth map failed.
     #[error("cannot render the face depth: {reason}")]
     Render { reason: String },
-    /// A depth network or RGB-D recording failed (the cause names the file).
+    /// A depth source failed (the cause names the file or frame).
     #[error(transparent)]
     Depth(Box<visage_depth::DepthError>),
     /// A step failed on one frame (`frame` names its source, `step` what was being done).
@@ -48,13 +48,6 @@ pub enum Error {
     /// An input holds nothing to process.
     #[error("{}: {reason}", path.display())]
     Input { path: PathBuf, reason: String },
-    /// A depth folder has fewer frames than the input.
-    #[error("{}: holds {frames} depth frames; input frame {index} has none", dir.display())]
-    MissingDepth {
-        dir: PathBuf,
-        frames: usize,
-        index: usize,
-    },
     /// An output file or folder could not be written.
     #[error("cannot write {}", path.display())]
     Write {

@@ -125,8 +125,9 @@ pub use stages::Surfaces;
 
 pub use visage_camera::{DepthKind, Intrinsics, RigidTransform, DEFAULT_FOV_DEG};
 pub use visage_depth::{
-    AlignMode, DepthNetwork, DepthSequence, EdgeMask, NetworkConfig, NetworkRegion, OutputKind,
-    Registration, RgbdLayout, RgbdOptions, RgbdRecording,
+    AlignMode, AlignedNetwork, DepthError, DepthNetwork, DepthProvider, DepthRequest,
+    DepthSequence, EdgeMask, NetworkConfig, NetworkRegion, OutputKind, ProvidedDepth, Registration,
+    RgbdLayout, RgbdOptions, RgbdRecording,
 };
 pub use visage_face::FaceTarget;
 pub use visage_fem::{ClipOptions, Weights};
