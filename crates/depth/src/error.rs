@@ -27,12 +27,33 @@ pub enum DepthError {
     /// The runtime failed to prepare or run the network.
     #[error("{}: {reason}", path.display())]
     Runtime { path: PathBuf, reason: String },
+    /// A depth folder holds no PNG.
+    #[error("{}: no PNG depth frames found", dir.display())]
+    NoFrames { dir: PathBuf },
+    /// A depth folder has fewer frames than the input.
+    #[error("{}: holds {frames} depth frames; input frame {index} has none", dir.display())]
+    MissingFrame {
+        dir: PathBuf,
+        frames: usize,
+        index: usize,
+    },
+    /// Depth units per metre that are not a positive finite number.
+    #[error("invalid option depth-scale = {value}: must be positive and finite")]
+    DepthScale { value: f64 },
     /// An RGB-D recording's folder or lists are not usable.
     #[error("{}: {reason}", path.display())]
     Recording { path: PathBuf, reason: String },
     /// A camera file or depth image failed (the cause names the file).
     #[error(transparent)]
     Camera(#[from] visage_camera::CameraError),
+    /// A step failed on one frame (`frame` names the frame or its file, `step` what was being
+    /// done).
+    #[error("{frame}: {step}")]
+    Frame {
+        frame: String,
+        step: &'static str,
+        source: Box<DepthError>,
+    },
     /// An option outside its range.
     #[error("{name} = {value}: {reason}")]
     InvalidOption {
@@ -40,4 +61,16 @@ pub enum DepthError {
         value: String,
         reason: &'static str,
     },
+}
+
+impl DepthError {
+    /// `source` as the failure of `step` on the frame `frame` (a name for the user: the input
+    /// frame's source, or the depth file read for it).
+    pub fn on_frame(frame: &str, step: &'static str, source: impl Into<DepthError>) -> DepthError {
+        DepthError::Frame {
+            frame: frame.to_owned(),
+            step,
+            source: Box::new(source.into()),
+        }
+    }
 }

@@ -19,7 +19,10 @@ use std::path::{Path, PathBuf};
 
 use visage_camera::{read_depth_png, DepthKind, DepthMap};
 
-use crate::{mask_depth_edges, DepthError, EdgeMask, Registration};
+use crate::{
+    mask_depth_edges, DepthError, DepthProvider, DepthRequest, EdgeMask, ProvidedDepth,
+    Registration,
+};
 
 /// TUM RGB-D's depth scale: 5000 units per metre.
 pub const TUM_DEPTH_SCALE: f64 = 5000.0;
@@ -221,6 +224,32 @@ impl RgbdRecording {
                 })?;
         }
         Ok(Some(map))
+    }
+}
+
+impl DepthProvider for RgbdRecording {
+    /// The recording's folder.
+    fn describe(&self) -> String {
+        self.dir.display().to_string()
+    }
+
+    /// The map associated with colour frame `request.index`, checked against the camera; an
+    /// empty map when none was associated with it.
+    fn depth_map(&mut self, request: DepthRequest<'_>) -> Result<ProvidedDepth, DepthError> {
+        let k = request.k;
+        let map = match self
+            .depth(request.index)
+            .map_err(|e| DepthError::on_frame(request.source, "depth", e))?
+        {
+            Some(map) => {
+                k.check_size(map.width, map.height).map_err(|e| {
+                    DepthError::on_frame(request.source, "depth map of the recording", e)
+                })?;
+                map
+            }
+            None => DepthMap::empty(k.width, k.height, DepthKind::Z),
+        };
+        Ok(ProvidedDepth::read(map))
     }
 }
 

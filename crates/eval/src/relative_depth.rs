@@ -8,9 +8,9 @@
 use serde::Serialize;
 use visage_camera::{DepthKind, DepthMap};
 use visage_depth::{align, AlignMode, AlignmentOptions, FrameRegion, OutputKind, Prediction};
-use visage_face::render_surface_depth;
 use visage_mesh::TriMesh;
 use visage_morphable::{FaceFitter, FaceModel, FitOptions};
+use visage_render::render_depth;
 
 use crate::simulated_tracker::TrackedSequence;
 use crate::synthesis::SyntheticSequence;
@@ -81,11 +81,12 @@ pub fn align_to_fitted_model(
         mesh.vertices.clear();
         mesh.vertices
             .extend(shape.iter().map(|&p| fit.pose.apply(p)));
-        let reference =
-            render_surface_depth(&mesh, k, DepthKind::Z).map_err(|e| EvalError::Degenerate {
+        let reference = render_depth(&mesh, k, None, DepthKind::Z)
+            .map_err(|e| EvalError::Degenerate {
                 seed: truth.seed,
-                reason: format!("rendering the fitted model: {e}"),
-            })?;
+                reason: format!("rendering the fitted model: cannot render the face depth: {e}"),
+            })?
+            .depth;
         let prediction = Prediction {
             region: FrameRegion::frame(frame.width, frame.height),
             width: frame.width,

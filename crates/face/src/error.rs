@@ -39,9 +39,6 @@ pub enum FaceError {
     /// An image is too small or otherwise unusable.
     #[error("invalid image: {reason}")]
     Image { reason: String },
-    /// Rasterising the face mesh failed.
-    #[error("cannot render the face depth: {reason}")]
-    Render { reason: String },
     /// An option is outside its valid range.
     #[error("invalid option {name} = {value}: {reason}")]
     InvalidOption {

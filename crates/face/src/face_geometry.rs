@@ -16,9 +16,10 @@
 //! - the **metric landmarks**: each landmark's pixel back-projected to the z of its fitted
 //!   vertex. They reproject exactly onto the detected landmarks (so expressions and non-rigid
 //!   motion are kept in the image plane) and carry the fitted metric depth; this is the mesh
-//!   that [`crate::face_depth`] rasterises.
+//!   ([`face_trimesh`]) that the pipeline rasterises into the face's dense depth.
 
 use visage_camera::{horn_rotation, quaternion_to_matrix, Intrinsics, RigidTransform};
+use visage_mesh::TriMesh;
 
 use crate::{CanonicalMesh, FaceError, NUM_LANDMARKS};
 
@@ -274,6 +275,17 @@ fn solve6(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> Option<[f64; 6]> {
         x[row] = (b[row] - s) / a[row][row];
     }
     x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// The fitted face as a triangle mesh in camera coordinates (metres): the metric landmarks as
+/// vertices, the canonical triangles and UVs.
+pub fn face_trimesh(geometry: &FaceGeometry, canonical: &CanonicalMesh) -> TriMesh {
+    let mut mesh = TriMesh::new(
+        geometry.metric_landmarks.clone(),
+        canonical.triangles.clone(),
+    );
+    mesh.uvs = canonical.uvs.clone();
+    mesh
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! The face front end of visage (paper §3, ERRATA 7–8): MediaPipe's face detectors (BlazeFace
 //! short range, and full range for small faces) and FaceMesh landmark network run in pure Rust
 //! from the original Apache-2.0 `.tflite` files, video tracking, and the metric face geometry
-//! that turns 468 landmarks into a metric mesh and a dense depth map.
+//! that turns 468 landmarks into a metric mesh.
 //!
 //! Layers: [`model_files`] (verified `.tflite` files) → the inference engine of `visage-nn`
 //! ([`Network`](visage_nn::Network)) → networks ([`detector`], [`landmarker`], [`iris`]) →
@@ -61,10 +61,7 @@ pub mod canonical_mesh;
 pub mod face_geometry;
 
 pub use canonical_mesh::CanonicalMesh;
-pub use face_geometry::{fit_face_geometry, FaceGeometry, FacePose};
-pub mod face_depth;
-
-pub use face_depth::{face_trimesh, render_faces_depth, render_surface_depth};
+pub use face_geometry::{face_trimesh, fit_face_geometry, FaceGeometry, FacePose};
 mod regions;
 
 pub use regions::FaceRegion;

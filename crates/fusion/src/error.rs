@@ -16,13 +16,6 @@ pub enum FusionError {
     Fem(#[from] FemError),
     #[error(transparent)]
     MeshIo(#[from] MeshIoError),
-    #[error("{}: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    #[error("{}: no PNG depth frames found", dir.display())]
-    NoFrames { dir: PathBuf },
     #[error("{}: frame is {width}×{height} but the first frame is {expected_width}×{expected_height}", path.display())]
     FrameSize {
         path: PathBuf,

@@ -5,12 +5,12 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 use visage_camera::{Intrinsics, DEFAULT_FOV_DEG};
-use visage_depth::{DepthNetwork, RgbdRecording};
+use visage_depth::DepthProvider;
 use visage_face::FaceTarget;
 use visage_fem::{ClipOptions, Weights};
 use visage_fusion::{
-    DepthSequence, FusionParams, MeshKind, MeshingOptions, ANCHORED_WEIGHTS_FACE,
-    ANCHORED_WEIGHTS_MAP, DEFAULT_MAX_DEPTH_M, MODEL_WEIGHTS_MAP,
+    FusionParams, MeshKind, MeshingOptions, ANCHORED_WEIGHTS_FACE, ANCHORED_WEIGHTS_MAP,
+    DEFAULT_MAX_DEPTH_M, MODEL_WEIGHTS_MAP,
 };
 
 use visage_morphable::{FaceModel, FitOptions};
@@ -40,40 +40,43 @@ pub enum DepthSource {
     /// The metric face fit's surface (the face "CNN depth").
     #[default]
     Face,
-    /// A folder of 16-bit PNG z-depth maps in millimetres, the i-th file for input frame i
-    /// (an RGB-D sensor, a depth network's output).
-    Folder(DepthSequence),
     /// The morphable model fitted to the frame: this person's face with the frame's
     /// expression (needs the model fit).
     Model,
-    /// A depth network run on every frame (its face region by default), its output aligned
-    /// to the metric face — the fitted model's surface, or the face fit's without the model —
-    /// where it is not metric.
-    Network(Box<DepthNetwork>),
-    /// An RGB-D recording's depth maps, the one associated with each colour frame (the input
-    /// must be the recording's colour frames, in its order).
-    Recording(Box<RgbdRecording>),
+    /// A depth map per frame from a provider: a folder of 16-bit PNG maps, the i-th file for
+    /// input frame i (`DepthSequence`); an RGB-D recording's maps, the one associated with
+    /// each colour frame (`RgbdRecording`; the input must be the recording's colour frames, in
+    /// its order); a depth network run on every frame, its output aligned to the metric face —
+    /// the fitted model's surface, or the face fit's without the model — where it is not
+    /// metric (`AlignedNetwork`).
+    Maps(Box<dyn DepthProvider>),
 }
 
 impl DepthSource {
-    /// `"face"` or the folder's path.
+    /// Depth maps from `provider`.
+    pub fn maps(provider: impl DepthProvider + 'static) -> Self {
+        DepthSource::Maps(Box::new(provider))
+    }
+
+    /// `"face"`, `"model"` or the provider's file or folder.
     pub fn describe(&self) -> String {
         match self {
             DepthSource::Face => "face".into(),
             DepthSource::Model => "model".into(),
-            DepthSource::Folder(seq) => seq.dir.display().to_string(),
-            DepthSource::Network(net) => net.path().display().to_string(),
-            DepthSource::Recording(rec) => rec.dir.display().to_string(),
+            DepthSource::Maps(provider) => provider.describe(),
         }
     }
 
     /// Whether each frame's depth is a map read or computed for it (a folder, a network, a
     /// recording), rather than a fitted surface.
     pub fn is_map(&self) -> bool {
-        matches!(
-            self,
-            DepthSource::Folder(_) | DepthSource::Network(_) | DepthSource::Recording(_)
-        )
+        matches!(self, DepthSource::Maps(_))
+    }
+
+    /// Whether the maps are aligned to the fitted face (a depth network's), which then must
+    /// be kept for them.
+    pub fn needs_reference(&self) -> bool {
+        matches!(self, DepthSource::Maps(provider) if provider.needs_reference())
     }
 }
 

@@ -6,10 +6,11 @@ use std::time::Instant;
 
 use serde::Serialize;
 use visage_camera::{DepthKind, Intrinsics};
+use visage_depth::DepthSequence;
 use visage_fem::{ClipOptions, FusionSystem, Weights};
 use visage_fusion::{
-    solve_clip_frames, ClipFrame, ClipState, DepthSequence, FrameStatus as FusedStatus,
-    FusionSetup, ImagePlaneFuser, MeshingOptions, SurfaceFuser, DEFAULT_MAX_DEPTH_M,
+    solve_clip_frames, ClipFrame, ClipState, FrameStatus as FusedStatus, FusionSetup,
+    ImagePlaneFuser, MeshingOptions, SequenceSurvey, SurfaceFuser, DEFAULT_MAX_DEPTH_M,
 };
 use visage_mesh::io::PlyFormat;
 
@@ -78,7 +79,12 @@ pub fn fuse_depth_folder(
             reason: "must be positive",
         });
     }
-    let survey = sequence.survey(options.max_depth_m)?;
+    let survey = SequenceSurvey::new(
+        &sequence.dir,
+        &sequence.frames,
+        options.max_depth_m,
+        |index| sequence.read(index).map_err(Error::from),
+    )?;
     k.check_size(survey.width, survey.height)?;
     let setup_start = Instant::now();
     let setup = FusionSetup::new(k, &survey.domain, &survey.mean_depth, &options.meshing)?;

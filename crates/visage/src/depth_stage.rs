@@ -1,55 +1,71 @@
-//! The depth maps of a frame that come from outside the face fit: a folder of PNGs, an RGB-D
-//! recording's associated map, or a depth network's output aligned to the metric face. Its own
-//! thread in [`crate::Reconstructor::run`] (a network costs more than everything else).
+//! The depth maps of a frame that come from outside the face fit, asked of the run's
+//! [`DepthProvider`] (a folder of PNGs, an RGB-D recording's associated map, a depth network's
+//! output aligned to the metric face). Its own thread in [`crate::Reconstructor::run`] (a
+//! network costs more than everything else).
 
 use std::sync::Arc;
 use std::time::Instant;
 
 use image::RgbImage;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
-use visage_depth::{align, AlignmentOptions, DepthNetwork, RgbdRecording};
-use visage_face::{render_faces_depth, render_surface_depth, CanonicalMesh};
-use visage_fusion::DepthSequence;
+use visage_depth::{DepthProvider, DepthRequest};
+use visage_face::CanonicalMesh;
 use visage_mesh::TriMesh;
 
-use crate::stages::Tracked;
+use crate::face_depth::{render_faces_depth, render_surface_depth};
+use crate::stages::{FittedModel, Tracked, TrackedFace};
 use crate::Error;
 use visage_run_folder::DepthAlignmentMetrics;
 
-/// Where the maps come from.
-pub(crate) enum MapSource {
-    Folder(DepthSequence),
-    Recording(Box<RgbdRecording>),
-    Network(Box<NetworkDepth>),
-}
-
-/// A depth network and what its alignment needs: the face it is aligned to.
-pub(crate) struct NetworkDepth {
-    pub network: DepthNetwork,
-    pub canonical: Arc<CanonicalMesh>,
+/// The fitted face a provider's output is aligned to, rendered per frame.
+struct ReferenceFace {
+    canonical: Arc<CanonicalMesh>,
     /// The fitted model's mesh (its vertices rewritten per frame), rendered as the reference
     /// when the model is fitted; else the rigid face fit's surface is.
-    pub model_mesh: TriMesh,
-    pub options: AlignmentOptions,
+    model_mesh: TriMesh,
 }
 
 /// Acquires each frame's depth map.
 pub(crate) struct DepthStage {
-    pub k: Intrinsics,
-    pub source: MapSource,
+    k: Intrinsics,
+    provider: Box<dyn DepthProvider>,
     /// Depth beyond this is no depth, metres.
-    pub max_depth: f64,
+    max_depth: f64,
+    /// When the provider aligns its maps to the fitted face.
+    reference: Option<ReferenceFace>,
 }
 
 impl DepthStage {
-    /// Whether it needs the frame's image (a network does).
-    pub fn needs_image(&self) -> bool {
-        matches!(self.source, MapSource::Network(_))
+    /// The stage of `provider`; `canonical` and `model_mesh` (the fitted model's triangles)
+    /// render the reference face when the provider needs one.
+    pub fn new(
+        k: Intrinsics,
+        provider: Box<dyn DepthProvider>,
+        max_depth: f64,
+        canonical: &Arc<CanonicalMesh>,
+        model_mesh: &TriMesh,
+    ) -> DepthStage {
+        let reference = provider.needs_reference().then(|| ReferenceFace {
+            canonical: Arc::clone(canonical),
+            model_mesh: model_mesh.clone(),
+        });
+        DepthStage {
+            k,
+            provider,
+            max_depth,
+            reference,
+        }
     }
 
-    /// Puts the frame's depth map into `tracked` (none without a face: nothing is fused then).
-    /// A recording frame without an associated map, or a network output that cannot be
-    /// aligned, gets an empty map: the fusion carries the surface through it.
+    /// Whether it needs the frame's image (a network does).
+    pub fn needs_image(&self) -> bool {
+        self.provider.needs_image()
+    }
+
+    /// Puts the frame's depth map into `tracked` (none without a face: nothing is fused then),
+    /// and the alignment's record and warning when the provider aligns. A recording frame
+    /// without an associated map, or a network output that cannot be aligned, gets an empty
+    /// map: the fusion carries the surface through it.
     ///
     /// # Errors
     /// A missing or unreadable depth file, a map of another size than the frame, a failing
@@ -59,127 +75,62 @@ impl DepthStage {
         image: Option<&RgbImage>,
         tracked: &mut Tracked,
     ) -> Result<(), Error> {
-        if tracked.face.is_none() {
+        let Some(face) = &tracked.face else {
             return Ok(());
-        }
-        let start = Instant::now();
-        let index = tracked.metrics.index;
-        let source = tracked.metrics.source.clone();
-        let on_frame = |step, e: Error| Error::on_frame(&source, step, e);
-        let map = match &mut self.source {
-            MapSource::Folder(seq) => read_folder_depth(seq, index, &self.k)?,
-            MapSource::Recording(rec) => {
-                match rec.depth(index).map_err(|e| on_frame("depth", e.into()))? {
-                    Some(map) => {
-                        self.k
-                            .check_size(map.width, map.height)
-                            .map_err(|e| on_frame("depth map of the recording", e.into()))?;
-                        map
-                    }
-                    None => DepthMap::empty(self.k.width, self.k.height, DepthKind::Z),
-                }
-            }
-            MapSource::Network(net) => {
-                let image = image.ok_or(Error::InvalidOption {
-                    name: "--depth",
-                    value: "network".into(),
-                    reason: "a depth network needs every frame's image",
-                })?;
-                let (map, record, warning) = net
-                    .infer(&self.k, image, tracked, self.max_depth)
-                    .map_err(|e| on_frame("depth network", e))?;
-                tracked.metrics.depth_alignment = Some(record);
-                if let (Some(w), None) = (warning, &tracked.warning) {
-                    tracked.warning = Some(format!("{source}: {w}"));
-                }
-                map
-            }
         };
+        let start = Instant::now();
+        let source = tracked.metrics.source.clone();
+        let reference = match &mut self.reference {
+            // Named as the step of the one provider that aligns so far, a depth network.
+            Some(r) => Some(
+                r.render(&self.k, face, tracked.model.as_ref())
+                    .map_err(|e| Error::on_frame(&source, "depth network", e))?,
+            ),
+            None => None,
+        };
+        let depth = self.provider.depth_map(DepthRequest {
+            index: tracked.metrics.index,
+            source: &source,
+            image,
+            k: &self.k,
+            face_box: face.face_box,
+            reference,
+            max_depth: self.max_depth,
+        })?;
+        if let Some(alignment) = &depth.alignment {
+            tracked.metrics.depth_alignment = Some(match alignment {
+                Ok(fit) => DepthAlignmentMetrics::aligned(fit),
+                Err(failure) => DepthAlignmentMetrics::failed(failure),
+            });
+        }
+        if let (Some(w), None) = (depth.warning, &tracked.warning) {
+            tracked.warning = Some(format!("{source}: {w}"));
+        }
         tracked.metrics.ms.depth += start.elapsed().as_secs_f64() * 1e3;
-        tracked.depth_map = Some(map);
+        tracked.depth_map = Some(depth.map);
         Ok(())
     }
 }
 
-impl NetworkDepth {
-    /// Runs the network on the frame, aligns its output to the fitted face and returns the
-    /// metric map, the alignment's record and, when it failed, why.
-    fn infer(
+impl ReferenceFace {
+    /// The z-depth of the fitted model when it is fitted, else of the rigid face fit.
+    fn render(
         &mut self,
         k: &Intrinsics,
-        image: &RgbImage,
-        tracked: &Tracked,
-        max_depth: f64,
-    ) -> Result<(DepthMap, DepthAlignmentMetrics, Option<String>), Error> {
-        let Some(face) = &tracked.face else {
-            unreachable!("acquire returns early without a face");
-        };
-        let (w, h) = image.dimensions();
-        let region = self.network.region(w, h, Some(face.face_box));
-        let prediction = self
-            .network
-            .predict(image, region)
-            .map_err(|e| Error::Depth(Box::new(e)))?;
-        let output = self.network.config().output.clone();
-        let mut reference = match &tracked.model {
+        face: &TrackedFace,
+        model: Option<&FittedModel>,
+    ) -> Result<DepthMap, Error> {
+        match model {
             Some(model) => {
                 self.model_mesh.vertices.clone_from(&model.camera);
-                render_surface_depth(&self.model_mesh, k, DepthKind::Z)?
+                render_surface_depth(&self.model_mesh, k, DepthKind::Z)
             }
             None => render_faces_depth(
                 std::slice::from_ref(&face.geometry),
                 &self.canonical,
                 k,
                 DepthKind::Z,
-            )?,
-        };
-        if output.measures == DepthKind::Ray {
-            for v in 0..reference.height {
-                for u in 0..reference.width {
-                    let i = (v * reference.width + u) as usize;
-                    let z = reference.data[i] as f64;
-                    if z > 0.0 {
-                        reference.data[i] = (z / k.ray(u as f64, v as f64)[2]) as f32;
-                    }
-                }
-            }
-            reference.kind = DepthKind::Ray;
-        }
-        let mode = self.network.config().alignment();
-        match align(
-            &prediction,
-            &reference,
-            output.kind,
-            output.scale,
-            mode,
-            &self.options,
-        ) {
-            Ok(fit) => {
-                let map = prediction.depth_map(w, h, output.measures, max_depth, |x| fit.depth(x));
-                Ok((map, DepthAlignmentMetrics::aligned(&fit), None))
-            }
-            Err(failure) => Ok((
-                DepthMap::empty(w, h, output.measures),
-                DepthAlignmentMetrics::failed(&failure),
-                Some(format!(
-                    "the depth network's output was not used: {failure}"
-                )),
-            )),
+            ),
         }
     }
-}
-
-/// Input frame `index`'s map from a depth folder, checked against the camera.
-fn read_folder_depth(seq: &DepthSequence, index: usize, k: &Intrinsics) -> Result<DepthMap, Error> {
-    if index >= seq.frames.len() {
-        return Err(Error::MissingDepth {
-            dir: seq.dir.clone(),
-            frames: seq.frames.len(),
-            index,
-        });
-    }
-    let map = seq.read(index)?;
-    k.check_size(map.width, map.height)
-        .map_err(|e| Error::on_frame(&seq.frames[index].display().to_string(), "depth frame", e))?;
-    Ok(map)
 }

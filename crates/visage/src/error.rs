@@ -34,7 +34,10 @@ pub enum Error {
     /// An output folder's file could not be written, read or continued.
     #[error(transparent)]
     RunFolder(#[from] visage_run_folder::RunFolderError),
-    /// A depth network or RGB-D recording failed (the cause names the file).
+    /// Rasterising the fitted face or model into a depth map failed.
+    #[error("cannot render the face depth: {reason}")]
+    Render { reason: String },
+    /// A depth source failed (the cause names the file or frame).
     #[error(transparent)]
     Depth(Box<visage_depth::DepthError>),
     /// A step failed on one frame (`frame` names its source, `step` what was being done).
@@ -47,13 +50,6 @@ pub enum Error {
     /// An input holds nothing to process.
     #[error("{}: {reason}", path.display())]
     Input { path: PathBuf, reason: String },
-    /// A depth folder has fewer frames than the input.
-    #[error("{}: holds {frames} depth frames; input frame {index} has none", dir.display())]
-    MissingDepth {
-        dir: PathBuf,
-        frames: usize,
-        index: usize,
-    },
     /// No frame of the input showed a face (neither detector found one).
     #[error("no face was found in any of the {frames} frames")]
     NoFace { frames: usize },

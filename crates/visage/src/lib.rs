@@ -48,6 +48,7 @@ mod config;
 mod depth_folder;
 mod depth_stage;
 mod error;
+mod face_depth;
 mod first_faces;
 mod folder_run;
 mod input;
@@ -68,6 +69,7 @@ pub use config::{
 };
 pub use depth_folder::{fuse_depth_folder, FuseOptions};
 pub use error::Error;
+pub use face_depth::{render_faces_depth, render_surface_depth};
 pub use first_faces::first_faces;
 pub use folder_run::{run_into, FolderOptions, FolderRun};
 pub use input::{FrameFilter, Input, KeptFrames};
@@ -78,7 +80,8 @@ pub use stages::Surfaces;
 
 pub use visage_camera::{DepthKind, Intrinsics, RigidTransform, DEFAULT_FOV_DEG};
 pub use visage_depth::{
-    AlignMode, DepthNetwork, EdgeMask, NetworkConfig, NetworkRegion, OutputKind, Registration,
+    AlignMode, AlignedNetwork, DepthError, DepthNetwork, DepthProvider, DepthRequest,
+    DepthSequence, EdgeMask, NetworkConfig, NetworkRegion, OutputKind, ProvidedDepth, Registration,
     RgbdLayout, RgbdOptions, RgbdRecording,
 };
 pub use visage_face::{
@@ -86,7 +89,7 @@ pub use visage_face::{
     DEFAULT_LATENCY_FRAMES, MAX_LATENCY_FRAMES,
 };
 pub use visage_fem::{ClipOptions, Weights};
-pub use visage_fusion::{DepthSequence, MeshKind, MeshingOptions, DEFAULT_MAX_DEPTH_M};
+pub use visage_fusion::{MeshKind, MeshingOptions, DEFAULT_MAX_DEPTH_M};
 pub use visage_mesh::io::{write_ply, PlyFormat};
 pub use visage_mesh::{TriMesh, TriangulationKind};
 pub use visage_morphable::{FaceModel, FitOptions};

@@ -13,7 +13,7 @@ use visage_morphable::{CanonicalCorrespondence, FaceFitter, FaceModel, IctModel}
 use visage_video::Frame;
 
 use crate::config::{Builder, ModelSource, Parameters};
-use crate::depth_stage::{DepthStage, MapSource, NetworkDepth};
+use crate::depth_stage::DepthStage;
 use crate::keypoint_motion::KeypointMotion;
 use crate::pipeline::{run_stages, Stages};
 use crate::recorder::Recorder;
@@ -275,8 +275,7 @@ impl Reconstructor {
             rest: builder.rest_pose.then(|| RestPose::new(m)),
             weights: Vec::with_capacity(m.expressions.len()),
             // A depth network is aligned to the fitted model's surface.
-            surface: (uses_model || matches!(builder.depth, DepthSource::Network(_)))
-                .then(|| Arc::clone(m)),
+            surface: (uses_model || builder.depth.needs_reference()).then(|| Arc::clone(m)),
             lids: LidGate::default(),
         });
         let fused_depth = match &builder.depth {
@@ -284,22 +283,16 @@ impl Reconstructor {
             DepthSource::Model => FusedDepth::Model,
             _ => FusedDepth::Maps,
         };
-        let map_source = match builder.depth {
+        let depth = match builder.depth {
             DepthSource::Face | DepthSource::Model => None,
-            DepthSource::Folder(seq) => Some(MapSource::Folder(seq)),
-            DepthSource::Recording(rec) => Some(MapSource::Recording(rec)),
-            DepthSource::Network(network) => Some(MapSource::Network(Box::new(NetworkDepth {
-                network: *network,
-                canonical: Arc::clone(&canonical),
-                model_mesh: model_mesh.clone(),
-                options: visage_depth::AlignmentOptions::default(),
-            }))),
+            DepthSource::Maps(provider) => Some(DepthStage::new(
+                k,
+                provider,
+                params.max_depth_m,
+                &canonical,
+                &model_mesh,
+            )),
         };
-        let depth = map_source.map(|source| DepthStage {
-            k,
-            source,
-            max_depth: params.max_depth_m,
-        });
         let mut mesh = TriMesh::new(Vec::new(), Vec::new());
         if let Some(t) = fusion.triangles() {
             mesh.triangles = t.to_vec();

@@ -11,8 +11,7 @@ use image::RgbImage;
 use visage_camera::RigidTransform;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_face::{
-    fit_face_geometry, render_faces_depth, render_surface_depth, CanonicalMesh, Eye, Eyes, Face,
-    FaceGeometry, FaceTracker, IrisLandmarker,
+    fit_face_geometry, CanonicalMesh, Eye, Eyes, Face, FaceGeometry, FaceTracker, IrisLandmarker,
 };
 use visage_fusion::{ClipFrame, FaceFrame, FusedSurfaces, MeshKind, ModelFrame, SurfaceFusion};
 use visage_mesh::TriMesh;
@@ -22,6 +21,7 @@ use visage_morphable::FaceFitter;
 use visage_morphable::FaceModel;
 use visage_video::Frame;
 
+use crate::face_depth::{render_faces_depth, render_surface_depth};
 use crate::Error;
 use visage_face::{face_jumped, CutDetector};
 use visage_face::{DistanceSmoother, LandmarkSmoother};

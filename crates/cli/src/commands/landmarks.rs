@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Args;
 use serde_json::json;
-use visage::{check_fov, LandmarkReader};
+use visage::{check_fov, render_faces_depth, LandmarkReader};
 use visage_camera::{write_depth_png, DepthKind, Intrinsics, DEFAULT_FOV_DEG};
-use visage_face::{model_files, render_faces_depth};
+use visage_face::model_files;
 use visage_video::{is_image_path, FrameSource};
 
 /// Arguments of `visage landmarks`.

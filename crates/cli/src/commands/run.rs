@@ -13,11 +13,11 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use indicatif::ProgressBar;
 use visage::{
-    file_names, BlendshapeFrame, Camera, DepthKind, DepthNetwork, DepthSequence, DepthSource,
-    EdgeMask, FaceTarget, FolderOptions, FrameMetrics, FrameSink, Input, Intrinsics, KeptFrames,
-    LandmarksFrame, MeshFrame, MeshKind, ModelSource, NetworkConfig, PlyFormat, Reconstructor,
-    Registration, RgbdLayout, RgbdOptions, RgbdRecording, RigidTransform, TemporalMode,
-    DEFAULT_SUBDIVISION,
+    file_names, AlignedNetwork, BlendshapeFrame, Camera, DepthKind, DepthNetwork, DepthSequence,
+    DepthSource, EdgeMask, FaceTarget, FolderOptions, FrameMetrics, FrameSink, Input, Intrinsics,
+    KeptFrames, LandmarksFrame, MeshFrame, MeshKind, ModelSource, NetworkConfig, PlyFormat,
+    Reconstructor, Registration, RgbdLayout, RgbdOptions, RgbdRecording, RigidTransform,
+    TemporalMode, DEFAULT_SUBDIVISION,
 };
 
 use crate::commands::export::{exports_into, print_summary, ExportArgs};
@@ -387,7 +387,7 @@ impl PipelineArgs {
             }
         };
         let depth = match (recording, self.depth.as_str()) {
-            (Some(recording), _) => DepthSource::Recording(Box::new(recording)),
+            (Some(recording), _) => DepthSource::maps(recording),
             (None, "face") => DepthSource::Face,
             (None, "model") => DepthSource::Model,
             (None, network) if network.to_ascii_lowercase().ends_with(".onnx") => {
@@ -417,9 +417,9 @@ impl PipelineArgs {
                         }
                     );
                 }
-                DepthSource::Network(Box::new(net))
+                DepthSource::maps(AlignedNetwork::new(net))
             }
-            (None, dir) => DepthSource::Folder(
+            (None, dir) => DepthSource::maps(
                 DepthSequence::open(
                     dir.as_ref(),
                     self.depth_scale.unwrap_or(1000.0),

@@ -1,9 +1,8 @@
 //! Metric geometry and dense depth on the astronaut portrait (60° horizontal field of view).
 
-mod common;
-
-use visage_camera::{DepthKind, Intrinsics};
-use visage_face::{fit_face_geometry, render_faces_depth, CanonicalMesh, FaceMesh};
+use visage::{render_faces_depth, DepthKind, Intrinsics};
+use visage_face::{fit_face_geometry, CanonicalMesh, FaceMesh};
+use visage_testdata::require;
 
 #[test]
 #[cfg_attr(
@@ -11,7 +10,11 @@ use visage_face::{fit_face_geometry, render_faces_depth, CanonicalMesh, FaceMesh
     ignore = "needs ../shared and the model files (scripts/setup.sh)"
 )]
 fn astronaut_depth_is_metric_and_matches_the_fitted_mesh() {
-    let (data, models) = (common::data_dir(), common::models_dir());
+    let data = require(visage_testdata::shared_dir().join("data"));
+    let models = visage_testdata::models_dir();
+    for file in visage_testdata::MODEL_FILES {
+        require(models.join(file));
+    }
     let img = image::open(data.join("images/astronaut.png"))
         .unwrap()
         .to_rgb8();
