@@ -11,7 +11,7 @@ use visage_camera::{write_depth_png, DepthKind, Intrinsics};
 use visage_mesh::TriMesh;
 use visage_render::{
     projective_uvs, turntable, write_srgb_png, Albedo, Camera, CullMode, Frame, Mat4, Material,
-    Renderer, Scene, Texture, Wrap, UNLIT,
+    Renderer, Scene, Texture, UNLIT,
 };
 
 /// Depth PNG scale: stored value = metres × 1000 (millimetres), what `visage fuse --depth` reads.
@@ -208,21 +208,13 @@ fn numbered(path: &Path, view: usize, views: usize) -> PathBuf {
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let cfg = RenderConfig::from_args(args)?;
     let k = cfg.camera.intrinsics;
-    let albedo = match &cfg.texture {
-        Some(texture) => Albedo::Texture {
-            texture,
-            wrap: Wrap::Clamp,
-        },
-        None if !cfg.mesh.colors.is_empty() => Albedo::VertexColors,
-        None => Albedo::Constant([0.8; 3]),
-    };
     let scene = Scene {
         material: if cfg.unlit {
             UNLIT
         } else {
             Material::default()
         },
-        albedo,
+        albedo: Albedo::for_mesh(&cfg.mesh, cfg.texture.as_ref()),
         cull: cfg.cull,
         ..Scene::default()
     };
