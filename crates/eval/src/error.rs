@@ -50,6 +50,16 @@ pub enum EvalError {
     /// No run of a clip has three consecutive frames with a face to measure.
     #[error("{}: no three consecutive frames with a face", clip.display())]
     NoSegments { clip: PathBuf },
+    /// A folder could not be created.
+    #[error("{}: cannot create", path.display())]
+    CreateDir {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// An image could not be written (the renderer's error names the file).
+    #[error(transparent)]
+    WriteImage(visage_render::RenderError),
     /// A file could not be written.
     #[error("{}: {source}", path.display())]
     Io {

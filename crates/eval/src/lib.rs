@@ -23,6 +23,7 @@
 mod benchmark;
 mod clip_runs;
 mod error;
+mod first_frames;
 mod method;
 pub mod metrics;
 pub mod model_fit;
@@ -50,6 +51,7 @@ pub use benchmark::{
 };
 pub use clip_runs::{evaluate_video, VideoOptions};
 pub use error::{ClipRunError, EvalError};
+pub use first_frames::write_first_frames;
 pub use method::{
     AnchoredInput, Method, MethodInput, MethodRun, ModelInput, VertexKind,
     BENCHMARK_FAIRING_LENGTH_M,
