@@ -11,13 +11,19 @@
 //! time per frame) → [`write_results`] (`results.json`, `results.csv`, SVG plots) and
 //! [`table`].
 //!
+//! On real clips, where there is no truth: [`evaluate_video`] runs the pipeline four ways
+//! (per-frame fit, streaming, causal, clip mode) and [`evaluate_clip`] measures each against
+//! filters on the tracked landmarks (`visage eval video`).
+//!
 //! Everything is deterministic given the configuration and seed, except the `ms_per_frame`
 //! timing fields.
 
 #![forbid(unsafe_code)]
 
 mod benchmark;
+mod clip_runs;
 mod error;
+mod first_frames;
 mod method;
 pub mod metrics;
 pub mod model_fit;
@@ -43,7 +49,9 @@ pub use benchmark::{
     SiftAnchoring, SiftFairingInfo, SweepPoint, TaubinTuning, ANCHORED_SUBDIVISION,
     ANCHORED_WEIGHTS, OPT_IN_METHODS, QUICK_EXPRESSIONS, TUNING_SALT,
 };
-pub use error::EvalError;
+pub use clip_runs::{evaluate_video, VideoOptions};
+pub use error::{ClipRunError, EvalError};
+pub use first_frames::write_first_frames;
 pub use method::{
     AnchoredInput, Method, MethodInput, MethodRun, ModelInput, VertexKind,
     BENCHMARK_FAIRING_LENGTH_M,

@@ -1,6 +1,20 @@
 //! Keypoints and matches drawn on an RGB image, for looking at what the detector found.
 
+use crate::matches_file::MatchRecord;
 use crate::Keypoint;
+
+/// Colour of drawn keypoints (green).
+pub const KEYPOINT_COLOUR: [u8; 3] = [0, 255, 64];
+
+/// Colours of drawn matches, match `k` in `MATCH_COLOURS[k % 6]`: saturated hues.
+pub const MATCH_COLOURS: [[u8; 3]; 6] = [
+    [255, 64, 64],
+    [255, 200, 0],
+    [64, 160, 255],
+    [255, 0, 255],
+    [0, 230, 230],
+    [255, 128, 0],
+];
 
 /// An 8-bit RGB image borrowed as `width × height` pixels, row-major, 3 bytes a pixel.
 pub struct Canvas<'a> {
@@ -10,6 +24,22 @@ pub struct Canvas<'a> {
     pub height: usize,
     /// The pixels.
     pub rgb: &'a mut [u8],
+}
+
+impl<'a> Canvas<'a> {
+    /// Borrows `rgb` (`3 · width · height` bytes, row-major) as a canvas.
+    ///
+    /// # Panics
+    /// If `rgb` holds another number of bytes.
+    #[track_caller]
+    pub fn new(width: usize, height: usize, rgb: &'a mut [u8]) -> Canvas<'a> {
+        assert_eq!(
+            rgb.len(),
+            3 * width * height,
+            "a {width} × {height} RGB canvas"
+        );
+        Canvas { width, height, rgb }
+    }
 }
 
 impl Canvas<'_> {
@@ -59,6 +89,31 @@ impl Canvas<'_> {
             let (sin, cos) = k.angle.to_radians().sin_cos();
             self.line(centre, [k.x + radius * cos, k.y + radius * sin], colour);
         }
+    }
+
+    /// Two images' matches on a canvas that holds the first image at the left edge and the
+    /// second `b_offset_x` pixels to its right: a line per match (colours cycling through
+    /// [`MATCH_COLOURS`]), then both images' keypoints in [`KEYPOINT_COLOUR`].
+    pub fn matches(
+        &mut self,
+        a: &[Keypoint],
+        b: &[Keypoint],
+        matches: &[MatchRecord],
+        b_offset_x: f32,
+    ) {
+        for (k, m) in matches.iter().enumerate() {
+            let colour = MATCH_COLOURS[k % MATCH_COLOURS.len()];
+            self.line(m.a_xy, [m.b_xy[0] + b_offset_x, m.b_xy[1]], colour);
+        }
+        let shifted: Vec<Keypoint> = b
+            .iter()
+            .map(|k| Keypoint {
+                x: k.x + b_offset_x,
+                ..*k
+            })
+            .collect();
+        self.keypoints(a, KEYPOINT_COLOUR);
+        self.keypoints(&shifted, KEYPOINT_COLOUR);
     }
 }
 

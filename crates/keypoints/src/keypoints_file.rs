@@ -21,12 +21,14 @@ pub struct KeypointsFile {
     pub descriptors: Vec<Vec<u8>>,
 }
 
-/// A keypoints file that cannot be used.
+/// A keypoints file that cannot be used, or read (then `source` says why).
 #[derive(Debug, thiserror::Error)]
 #[error("{}: {reason}", path.display())]
 pub struct KeypointsFileError {
     pub path: PathBuf,
     pub reason: String,
+    #[source]
+    pub source: Option<std::io::Error>,
 }
 
 impl KeypointsFile {
@@ -40,6 +42,20 @@ impl KeypointsFile {
         }
     }
 
+    /// Reads a keypoints file.
+    ///
+    /// # Errors
+    /// The file cannot be read (`reason` "cannot read the keypoints", the I/O error as
+    /// `source`); otherwise as [`KeypointsFile::parse_json`].
+    pub fn load_json(path: &Path) -> Result<Features, KeypointsFileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| KeypointsFileError {
+            path: path.to_owned(),
+            reason: "cannot read the keypoints".into(),
+            source: Some(source),
+        })?;
+        KeypointsFile::parse_json(&text, path)
+    }
+
     /// Reads a keypoints file's text; `path` names it in errors.
     ///
     /// # Errors
@@ -49,6 +65,7 @@ impl KeypointsFile {
         let bad = |reason: String| KeypointsFileError {
             path: path.to_owned(),
             reason,
+            source: None,
         };
         let file: KeypointsFile =
             serde_json::from_str(text).map_err(|e| bad(format!("not a keypoints file: {e}")))?;

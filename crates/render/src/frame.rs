@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use visage_camera::{DepthKind, DepthMap};
 use visage_mesh::TriMesh;
 
-use crate::albedo::Albedo;
+use crate::albedo::{Albedo, DEFAULT_ALBEDO};
 use crate::camera::Camera;
 use crate::deferred::{Block, DeferredPass, Rows, TileSetups};
 use crate::interpolation::{SetupPlanes, VertexChannels};
@@ -42,7 +42,7 @@ impl Default for Scene<'_> {
         Scene {
             material: Material::default(),
             light: Light::default(),
-            albedo: Albedo::Constant([0.8; 3]),
+            albedo: Albedo::Constant(DEFAULT_ALBEDO),
             background: [0.0; 3],
             two_sided: true,
             cull: CullMode::None,

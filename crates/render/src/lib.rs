@@ -93,7 +93,7 @@ pub mod texture;
 pub mod turntable;
 mod validate;
 
-pub use albedo::Albedo;
+pub use albedo::{Albedo, DEFAULT_ALBEDO};
 pub use camera::{Camera, DEFAULT_FAR, DEFAULT_NEAR};
 pub use color::write_srgb_png;
 pub use depth::{render_depth, render_depth_with, DepthRender};

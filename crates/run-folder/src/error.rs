@@ -40,6 +40,34 @@ pub enum RunFolderError {
         dir.display()
     )]
     NotEmpty { dir: PathBuf, holds: String },
+    /// A mesh or point cache could not be read (the mesh reader's error, which names the file).
+    #[error(transparent)]
+    ReadMesh(#[from] MeshIoError),
+    /// A frame of something else than a point cache was asked for.
+    #[error("--frame needs a point cache (OUT/sequence.pc2), not {}", path.display())]
+    FrameWithoutCache { path: PathBuf },
+    /// A point cache was given without the frame to take from it.
+    #[error("{}: a point cache needs --frame N (the sample to render)", path.display())]
+    CacheWithoutFrame { path: PathBuf },
+    /// A point cache whose points a frame are not the vertices of the mesh beside it.
+    #[error(
+        "{}: {points} points a frame, {} has {vertices} vertices",
+        cache.display(),
+        mesh.display()
+    )]
+    CacheMeshMismatch {
+        cache: PathBuf,
+        points: usize,
+        mesh: PathBuf,
+        vertices: usize,
+    },
+    /// A frame past the point cache's last sample.
+    #[error("{}: --frame {frame}: the cache has {samples} samples", cache.display())]
+    CacheFrameOutOfRange {
+        cache: PathBuf,
+        frame: usize,
+        samples: usize,
+    },
     /// A mesh file could not be written.
     #[error("cannot write {}", path.display())]
     WriteMesh { path: PathBuf, source: MeshIoError },

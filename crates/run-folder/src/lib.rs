@@ -3,7 +3,8 @@
 //! point cache, `landmarks.json`, the blendshape curves; [`LiveLinkCsvWriter`],
 //! [`BlendshapesJsonWriter`]), the records' schemas ([`LandmarksFrame`], [`Report`] and the
 //! rest of `metrics.json`), writing so that a reader never sees half a file
-//! ([`write_atomically`]), one run per folder ([`claim`], [`inspect`], [`clear_outputs`]) and continuing
+//! ([`write_atomically`]), a frame's surface read back from the point cache
+//! ([`read_mesh_or_cache`]), one run per folder ([`claim`], [`inspect`], [`clear_outputs`]) and continuing
 //! a run that stopped part-way ([`prepare_resume`]).
 //!
 //! Every file appears complete or not at all: a stream is written under `<name>.tmp` and
@@ -20,6 +21,7 @@ mod landmarks;
 mod live_link_csv;
 mod metrics;
 mod output;
+mod point_cache;
 mod resume;
 mod resume_point;
 mod stream;
@@ -40,6 +42,7 @@ pub use metrics::{
     StageTimes,
 };
 pub use output::{camera_to_y_up, MeshOutput, OutputDir, CACHE_MATERIAL, DEFAULT_TIMECODE_FPS};
+pub use point_cache::{read_cache_sample, read_mesh_or_cache};
 pub use resume::{prepare_resume, ResumeState};
 pub use resume_point::{
     FrameSelection, ResumePoint, RunDescription, RunParameters, WARM_UP_FRAMES,

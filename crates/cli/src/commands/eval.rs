@@ -9,8 +9,8 @@ use std::path::PathBuf;
 use anyhow::{bail, Context};
 use clap::{Args, Subcommand};
 use visage_eval::{
-    run_benchmark, run_sweep, sweep_table, table, write_results, write_sweep, BenchmarkConfig,
-    FaceAnchoring, Method, NoiseModel, ANCHORED_WEIGHTS,
+    run_benchmark, run_sweep, sweep_table, table, write_first_frames, write_results, write_sweep,
+    BenchmarkConfig, FaceAnchoring, Method, NoiseModel, ANCHORED_WEIGHTS,
 };
 use visage_face::CanonicalMesh;
 use visage_fem::Weights;
@@ -245,21 +245,7 @@ fn synthetic(args: SyntheticArgs) -> anyhow::Result<()> {
     write_results(&results, &args.out)?;
     if args.save_frames {
         let dir = args.out.join("frames");
-        std::fs::create_dir_all(&dir)
-            .with_context(|| format!("{}: cannot create", dir.display()))?;
-        for (s, info) in results.sequences.iter().enumerate() {
-            let seq = visage_eval::synthesize(
-                &model,
-                &visage_eval::SynthesisConfig {
-                    frames: 2,
-                    ..config.synthesis.clone()
-                },
-                info.seed,
-            )?;
-            let rgb = seq.render_color(0)?;
-            let path = dir.join(format!("seq{s:02}_frame000.png"));
-            visage_render::write_srgb_png(&path, seq.k.width, seq.k.height, &rgb)?;
-        }
+        write_first_frames(&model, &config.synthesis, &results.sequences, &dir)?;
     }
     print!("{}", table(&results));
     println!(

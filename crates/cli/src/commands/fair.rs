@@ -6,8 +6,9 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use clap::Args;
-use serde::Deserialize;
-use visage_fem::{boundary_vertices, fair, FairingOptions, Preconditioner, SurfaceMetrics};
+use visage_fem::{
+    boundary_vertices, fair, FairingConstraints, FairingOptions, Preconditioner, SurfaceMetrics,
+};
 
 /// Arguments of `visage fair`.
 #[derive(Args, Debug)]
@@ -41,18 +42,6 @@ pub struct FairArgs {
     pub jacobi: bool,
 }
 
-#[derive(Deserialize)]
-struct ConstraintsFile {
-    constraints: Vec<Constraint>,
-}
-
-#[derive(Deserialize)]
-struct Constraint {
-    vertex: usize,
-    position: [f64; 3],
-    weight: f64,
-}
-
 /// Runs `visage fair`; prints a JSON report (iterations, residual, roughness and mean |H|
 /// before and after, time).
 pub fn run(args: FairArgs) -> anyhow::Result<()> {
@@ -79,20 +68,7 @@ pub fn run(args: FairArgs) -> anyhow::Result<()> {
     if let Some(path) = &args.constraints {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("{}: cannot read the constraints", path.display()))?;
-        let file: ConstraintsFile = serde_json::from_str(&text)
-            .map_err(|e| anyhow::anyhow!("{}: not a constraints file: {e}", path.display()))?;
-        for (k, c) in file.constraints.iter().enumerate() {
-            if c.vertex >= n || !(0.0..=1.0).contains(&c.weight) {
-                bail!(
-                    "{}: constraint {k}: vertex {} of {n}, weight {} (must lie in [0, 1])",
-                    path.display(),
-                    c.vertex,
-                    c.weight
-                );
-            }
-            targets[c.vertex] = c.position;
-            weights[c.vertex] = c.weight;
-        }
+        FairingConstraints::parse_json(&text, path, n)?.apply(&mut targets, &mut weights);
     }
     let options = FairingOptions {
         gamma,

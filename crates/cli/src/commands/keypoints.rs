@@ -6,7 +6,9 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use visage_keypoints::{Canvas, Features, GrayImage, KeypointsFile, Sift, SiftOptions};
+use visage_keypoints::{
+    Canvas, Features, GrayImage, KeypointsFile, Sift, SiftOptions, KEYPOINT_COLOUR,
+};
 use visage_video::read_image;
 
 /// Arguments of `visage keypoints`.
@@ -99,12 +101,7 @@ pub fn run(args: KeypointsArgs) -> anyhow::Result<()> {
     if let Some(path) = &args.draw {
         let mut rgb = image.rgb.clone();
         let (width, height) = (rgb.width() as usize, rgb.height() as usize);
-        Canvas {
-            width,
-            height,
-            rgb: &mut rgb,
-        }
-        .keypoints(&features.keypoints, KEYPOINT_COLOUR);
+        Canvas::new(width, height, &mut rgb).keypoints(&features.keypoints, KEYPOINT_COLOUR);
         save_png(path, &rgb)?;
     }
     println!(
@@ -113,9 +110,6 @@ pub fn run(args: KeypointsArgs) -> anyhow::Result<()> {
     );
     Ok(())
 }
-
-/// Colour of drawn keypoints.
-pub const KEYPOINT_COLOUR: [u8; 3] = [0, 255, 64];
 
 fn write_keypoints(path: &Path, rgb: &image::RgbImage, features: &Features) -> anyhow::Result<()> {
     let file = KeypointsFile::new(rgb.width(), rgb.height(), features);
@@ -131,13 +125,6 @@ fn write_keypoints(path: &Path, rgb: &image::RgbImage, features: &Features) -> a
             })
     })
     .with_context(|| format!("{}: cannot write the keypoints", path.display()))
-}
-
-/// Reads a keypoints file written by `visage keypoints`.
-pub fn read_keypoints(path: &Path) -> anyhow::Result<Features> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read the keypoints", path.display()))?;
-    Ok(KeypointsFile::parse_json(&text, path)?)
 }
 
 /// Writes an RGB image as PNG, atomically.

@@ -6,10 +6,11 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Args;
 use image::RgbImage;
-use serde::Serialize;
-use visage_keypoints::{match_descriptors, Canvas, Features, MatchOptions, Sift};
+use visage_keypoints::{
+    match_descriptors, Canvas, Features, KeypointsFile, MatchOptions, MatchesFile, Sift,
+};
 
-use super::keypoints::{load, read_keypoints, save_png, SiftArgs, KEYPOINT_COLOUR};
+use super::keypoints::{load, save_png, SiftArgs};
 
 /// Arguments of `visage match`.
 #[derive(Args, Debug)]
@@ -33,27 +34,6 @@ pub struct MatchArgs {
     pub no_mutual: bool,
     #[command(flatten)]
     pub sift: SiftArgs,
-}
-
-#[derive(Serialize)]
-struct MatchRecord {
-    /// Keypoint index in the first image.
-    a: usize,
-    /// Keypoint index in the second image.
-    b: usize,
-    /// Descriptor distance (L2 over the bytes).
-    distance: f32,
-    /// Position in the first image, pixels.
-    a_xy: [f32; 2],
-    /// Position in the second image, pixels.
-    b_xy: [f32; 2],
-}
-
-#[derive(Serialize)]
-struct MatchReport {
-    keypoints_a: usize,
-    keypoints_b: usize,
-    matches: Vec<MatchRecord>,
 }
 
 /// Runs `visage match`.
@@ -80,23 +60,7 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
         mutual: !args.no_mutual,
     };
     let matches = match_descriptors(&fa.descriptors, &fb.descriptors, &options);
-    let report = MatchReport {
-        keypoints_a: fa.len(),
-        keypoints_b: fb.len(),
-        matches: matches
-            .iter()
-            .map(|m| {
-                let (p, q) = (&fa.keypoints[m.query], &fb.keypoints[m.train]);
-                MatchRecord {
-                    a: m.query,
-                    b: m.train,
-                    distance: m.distance,
-                    a_xy: [p.x, p.y],
-                    b_xy: [q.x, q.y],
-                }
-            })
-            .collect(),
-    };
+    let report = MatchesFile::new(&fa, &fb, &matches);
     let text = serde_json::to_string_pretty(&report)?;
     match &args.out {
         Some(path) => std::fs::write(path, text + "\n")
@@ -113,25 +77,8 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
         image::imageops::replace(&mut canvas, &a, 0, 0);
         image::imageops::replace(&mut canvas, &b, i64::from(wa), 0);
         let (width, height) = (canvas.width() as usize, canvas.height() as usize);
-        let mut draw = Canvas {
-            width,
-            height,
-            rgb: &mut canvas,
-        };
-        let shift = wa as f32;
-        for (k, m) in report.matches.iter().enumerate() {
-            draw.line(m.a_xy, [m.b_xy[0] + shift, m.b_xy[1]], line_colour(k));
-        }
-        let kb: Vec<_> = fb
-            .keypoints
-            .iter()
-            .map(|k| visage_keypoints::Keypoint {
-                x: k.x + shift,
-                ..*k
-            })
-            .collect();
-        draw.keypoints(&fa.keypoints, KEYPOINT_COLOUR);
-        draw.keypoints(&kb, KEYPOINT_COLOUR);
+        let mut draw = Canvas::new(width, height, &mut canvas);
+        draw.matches(&fa.keypoints, &fb.keypoints, &report.matches, wa as f32);
         save_png(path, &canvas)?;
     }
     Ok(())
@@ -140,7 +87,7 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
 /// The features of an image, or those a keypoints file holds (then without the image).
 fn features(path: &Path, sift: &mut Sift) -> anyhow::Result<(Features, Option<RgbImage>)> {
     if is_keypoints_file(path) {
-        return Ok((read_keypoints(path)?, None));
+        return Ok((KeypointsFile::load_json(path)?, None));
     }
     let image = load(path)?;
     Ok((sift.detect_and_compute(&image.gray), Some(image.rgb)))
@@ -150,17 +97,4 @@ fn features(path: &Path, sift: &mut Sift) -> anyhow::Result<(Features, Option<Rg
 fn is_keypoints_file(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("json"))
-}
-
-/// A colour per match, cycling through saturated hues.
-fn line_colour(k: usize) -> [u8; 3] {
-    const HUES: [[u8; 3]; 6] = [
-        [255, 64, 64],
-        [255, 200, 0],
-        [64, 160, 255],
-        [255, 0, 255],
-        [0, 230, 230],
-        [255, 128, 0],
-    ];
-    HUES[k % HUES.len()]
 }

@@ -11,7 +11,7 @@ use visage_camera::{write_depth_png, DepthKind, Intrinsics};
 use visage_mesh::TriMesh;
 use visage_render::{
     projective_uvs, turntable, write_srgb_png, Albedo, Camera, CullMode, Frame, Mat4, Material,
-    Renderer, Scene, Texture, Wrap, UNLIT,
+    Renderer, Scene, Texture, UNLIT,
 };
 
 /// Depth PNG scale: stored value = metres × 1000 (millimetres), what `visage fuse --depth` reads.
@@ -96,7 +96,7 @@ pub struct RenderConfig {
 impl RenderConfig {
     /// Reads and checks everything `args` names.
     pub fn from_args(args: RenderArgs) -> anyhow::Result<RenderConfig> {
-        let mut mesh = read_mesh_or_cache(&args.mesh, args.frame)?;
+        let mut mesh = visage::run_folder::read_mesh_or_cache(&args.mesh, args.frame)?;
         if mesh.vertices.is_empty() || mesh.triangles.is_empty() {
             bail!(
                 "{}: the mesh is empty ({} vertices, {} triangles): nothing to render",
@@ -179,55 +179,6 @@ impl RenderConfig {
     }
 }
 
-/// A mesh file, or sample `frame` of a run's point cache on the `mesh.obj` beside it, back in
-/// camera coordinates (the files' y-up axes are a half turn about x from them).
-fn read_mesh_or_cache(path: &Path, frame: Option<usize>) -> anyhow::Result<TriMesh> {
-    let is_cache = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("pc2"));
-    if !is_cache {
-        if frame.is_some() {
-            bail!(
-                "--frame needs a point cache (OUT/sequence.pc2), not {}",
-                path.display()
-            );
-        }
-        return Ok(visage_mesh::io::read_mesh(path)?);
-    }
-    let frame = frame.with_context(|| {
-        format!(
-            "{}: a point cache needs --frame N (the sample to render)",
-            path.display()
-        )
-    })?;
-    let cache = visage_mesh::io::read_pc2(path)?;
-    let obj = path.with_file_name(visage::file_names::CACHE_MESH);
-    let mut mesh = visage_mesh::io::read_obj(&obj)?;
-    if cache.points != mesh.vertices.len() {
-        bail!(
-            "{}: {} points a frame, {} has {} vertices",
-            path.display(),
-            cache.points,
-            obj.display(),
-            mesh.vertices.len()
-        );
-    }
-    if frame >= cache.samples() {
-        bail!(
-            "{}: --frame {frame}: the cache has {} samples",
-            path.display(),
-            cache.samples()
-        );
-    }
-    mesh.vertices = cache
-        .sample(frame)
-        .chunks_exact(3)
-        .map(|p| visage::run_folder::camera_to_y_up([p[0] as f64, p[1] as f64, p[2] as f64]))
-        .collect();
-    mesh.normals.clear();
-    Ok(mesh)
-}
-
 /// `turntable:N` with `1 ≤ N ≤ 3600`.
 fn parse_views(spec: &str) -> anyhow::Result<usize> {
     let n = spec
@@ -257,21 +208,13 @@ fn numbered(path: &Path, view: usize, views: usize) -> PathBuf {
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let cfg = RenderConfig::from_args(args)?;
     let k = cfg.camera.intrinsics;
-    let albedo = match &cfg.texture {
-        Some(texture) => Albedo::Texture {
-            texture,
-            wrap: Wrap::Clamp,
-        },
-        None if !cfg.mesh.colors.is_empty() => Albedo::VertexColors,
-        None => Albedo::Constant([0.8; 3]),
-    };
     let scene = Scene {
         material: if cfg.unlit {
             UNLIT
         } else {
             Material::default()
         },
-        albedo,
+        albedo: Albedo::for_mesh(&cfg.mesh, cfg.texture.as_ref()),
         cull: cfg.cull,
         ..Scene::default()
     };
