@@ -136,11 +136,11 @@ pub fn output_sums(dir: &Path) -> Result<std::collections::BTreeMap<String, File
 pub fn not_done(folder: &Path, input: &Path, options: &[String]) -> Option<String> {
     let text = match std::fs::read_to_string(folder.join(DONE)) {
         Ok(t) => t,
-        Err(_) => return Some("no done.json".into()),
+        Err(_) => return Some(format!("no {DONE}")),
     };
     let done: Done = match serde_json::from_str(&text) {
         Ok(d) => d,
-        Err(e) => return Some(format!("done.json does not parse ({e})")),
+        Err(e) => return Some(format!("{DONE} does not parse ({e})")),
     };
     if done.options != options {
         return Some(format!(

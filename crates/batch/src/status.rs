@@ -185,7 +185,7 @@ fn failure_reason(out: &Path, clip: &Clip) -> String {
         .ok()
         .and_then(|b| serde_json::from_slice::<record::Failed>(&b).ok())
         .map_or_else(
-            || "error.json does not parse".into(),
+            || format!("{} does not parse", record::ERROR),
             |f| f.error.lines().next().unwrap_or_default().to_owned(),
         )
 }

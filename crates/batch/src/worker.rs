@@ -166,7 +166,10 @@ impl Worker {
         if !self.retry_failed && folder.join(record::ERROR).is_file() {
             return Ok((
                 Outcome::Failed { now: false },
-                "failed before (error.json); kept, --retry-failed runs it again".into(),
+                format!(
+                    "failed before ({}); kept, --retry-failed runs it again",
+                    record::ERROR
+                ),
             ));
         }
         let tmp = self.partial_dir(clip, attempt);

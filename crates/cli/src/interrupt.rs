@@ -20,7 +20,10 @@ pub fn install() -> Arc<AtomicBool> {
         }
     });
     if let Err(e) = installed {
-        eprintln!("warning: Ctrl-C will stop at once, without writing metrics.json: {e}");
+        eprintln!(
+            "warning: Ctrl-C will stop at once, without writing {}: {e}",
+            visage::file_names::METRICS
+        );
     }
     flag
 }

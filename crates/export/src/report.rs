@@ -59,11 +59,12 @@ pub fn report_html(
         Some((_, glb)) => {
             let _ = writeln!(
                 h,
-                "<section><h2>Animation</h2><p class=\"sub\">sequence.glb: the fused surface \
+                "<section><h2>Animation</h2><p class=\"sub\">{}: the fused surface \
                  as morph targets and head motion, with the fused texture. Drag to orbit, \
                  scroll to zoom.</p><div id=\"visage-viewer\"></div>\
                  <script id=\"visage-glb\" type=\"application/octet-stream\">{}</script>\
                  </section>",
+                file_names::GLB,
                 base64(glb)
             );
         }

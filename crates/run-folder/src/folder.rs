@@ -41,19 +41,20 @@ impl FolderContents {
     pub fn describe(&self) -> String {
         let mut parts = Vec::new();
         match (self.status.as_deref(), self.frames) {
-            (Some("running"), _) => parts.push(
-                "a run that was killed before it finished (or is still running): \
-                 metrics.json says \"running\""
-                    .to_owned(),
-            ),
+            (Some("running"), _) => parts.push(format!(
+                "a run that was killed before it finished (or is still running): {} says \
+                 \"running\"",
+                file_names::METRICS
+            )),
             (Some(status), Some(n)) => parts.push(format!(
                 "a run with status \"{status}\" over {n} frame{}",
                 if n == 1 { "" } else { "s" }
             )),
             (Some(status), None) => parts.push(format!("a run with status \"{status}\"")),
-            (None, _) if self.has_run() => {
-                parts.push("a run that was killed before it finished (no metrics.json)".into())
-            }
+            (None, _) if self.has_run() => parts.push(format!(
+                "a run that was killed before it finished (no {})",
+                file_names::METRICS
+            )),
             (None, _) => {}
         }
         if !self.outputs.is_empty() {

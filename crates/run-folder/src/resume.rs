@@ -83,15 +83,16 @@ pub fn prepare_resume<P: RunParameters>(
     let metrics: serde_json::Value = match std::fs::read(&metrics_path) {
         Ok(bytes) => serde_json::from_slice(&bytes).map_err(|e| {
             refuse(format!(
-                "metrics.json is not readable JSON ({e}). Pass --overwrite to start again"
+                "{} is not readable JSON ({e}). Pass --overwrite to start again",
+                file_names::METRICS
             ))
         })?,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            return Err(refuse(
-                "it has no metrics.json, so which run made its files is unknown. Pass \
-                 --overwrite to start again"
-                    .into(),
-            ))
+            return Err(refuse(format!(
+                "it has no {}, so which run made its files is unknown. Pass --overwrite to \
+                 start again",
+                file_names::METRICS
+            )))
         }
         Err(source) => {
             return Err(Error::Read {
@@ -127,8 +128,8 @@ pub fn prepare_resume<P: RunParameters>(
     }
     if !["running", "interrupted", "failed", "complete"].contains(&status.as_str()) {
         return Err(refuse(format!(
-            "metrics.json's status {status:?} is none of visage's. Pass --overwrite to start \
-             again"
+            "{}'s status {status:?} is none of visage's. Pass --overwrite to start again",
+            file_names::METRICS
         )));
     }
 
@@ -165,18 +166,19 @@ pub fn prepare_resume<P: RunParameters>(
     if !meshed_indices.is_empty() {
         let Some(cache) = &cache else {
             return Err(refuse(format!(
-                "{} is missing, and landmarks.json lists {} meshed frames. Pass --overwrite to \
-                 start again",
+                "{} is missing, and {} lists {} meshed frames. Pass --overwrite to start again",
                 file_names::POINT_CACHE,
+                file_names::LANDMARKS,
                 meshed_indices.len()
             )));
         };
         let samples = pc2_whole_samples(cache)?;
         if samples < cache_indices.len() as u64 {
             return Err(refuse(format!(
-                "{} holds {samples} frames, and landmarks.json lists {} up to frame \
-                 {after_frame}. Pass --overwrite to start again",
+                "{} holds {samples} frames, and {} lists {} up to frame {after_frame}. Pass \
+                 --overwrite to start again",
                 cache.display(),
+                file_names::LANDMARKS,
                 cache_indices.len()
             )));
         }

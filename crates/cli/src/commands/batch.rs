@@ -135,11 +135,12 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
         return Err(Failure {
             code: SOME_FAILED,
             error: anyhow::anyhow!(
-                "{} of {} clips of shard {} failed ({}); each folder's error.json says why",
+                "{} of {} clips of shard {} failed ({}); each folder's {} says why",
                 summary.failed,
                 summary.clips,
                 shard.index,
-                summary.failed_ids.join(", ")
+                summary.failed_ids.join(", "),
+                visage::file_names::BATCH_ERROR
             ),
         }
         .into());

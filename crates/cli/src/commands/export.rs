@@ -100,8 +100,9 @@ pub fn print_summary(dir: &Path, summary: &ExportSummary) {
     }
     if let (Some(rms), Some(max)) = (summary.glb_rms_error_m, summary.glb_max_error_m) {
         eprintln!(
-            "sequence.glb: {} morph targets ({} ARKit), {:.3} mm RMS from the point cache \
-             (largest {:.3} mm)",
+            "{}: {} morph targets ({} ARKit), {:.3} mm RMS from the point cache (largest \
+             {:.3} mm)",
+            visage::file_names::GLB,
             summary.named_targets + summary.residual_targets,
             summary.named_targets,
             rms * 1e3,

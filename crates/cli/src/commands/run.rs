@@ -639,10 +639,12 @@ fn run_face(
             return Err(Failure {
                 code: interrupt::INTERRUPTED,
                 error: anyhow::anyhow!(
-                    "interrupted after {} frames: their meshes, landmarks.json and metrics.json \
+                    "interrupted after {} frames: their meshes, {} and {} \
                      (status \"interrupted\") are in {}; the same command with --resume goes \
                      on from there, `visage export {}` makes the other files",
                     run.frames,
+                    file_names::LANDMARKS,
+                    file_names::METRICS,
                     dir.display(),
                     dir.display()
                 ),
@@ -653,8 +655,9 @@ fn run_face(
             return Err(Failure {
                 code: crate::exit::NO_FACE,
                 error: anyhow::Error::new(e).context(format!(
-                    "{}: nothing to mesh (metrics.json is in {})",
+                    "{}: nothing to mesh ({} is in {})",
                     p.input_path().display(),
+                    file_names::METRICS,
                     dir.display()
                 )),
             }
@@ -662,8 +665,9 @@ fn run_face(
         }
         Some(e) => {
             return Err(anyhow::Error::new(e).context(format!(
-                "stopped after {} frames (meshes so far and metrics.json are in {})",
+                "stopped after {} frames (meshes so far and {} are in {})",
                 run.frames,
+                file_names::METRICS,
                 dir.display()
             )))
         }
