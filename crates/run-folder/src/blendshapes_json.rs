@@ -8,23 +8,19 @@
 //! `weights` follow `names`, angles as in the CSV (radians, the signs above), `fps` is `null`
 //! when unknown.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use visage_rig::{BlendshapeFrame, ARKIT_BLENDSHAPES};
 
 use crate::file_names;
-use crate::stream::{check_fps, create_tmp, finish_tmp, invalid_frame, open_tmp_for_append};
+use crate::stream::{check_fps, Stream};
 use crate::RunFolderError as Error;
 
 /// Streams frames to `blendshapes.json` (the module's docs), compact, under `<name>.tmp` until
 /// [`finish`](Self::finish); dropped unfinished, the frames so far stay under the temporary
 /// name.
 pub struct BlendshapesJsonWriter {
-    path: PathBuf,
-    tmp: PathBuf,
-    out: Option<BufWriter<File>>,
+    stream: Stream,
     frames: usize,
 }
 
@@ -42,19 +38,13 @@ impl BlendshapesJsonWriter {
         if let Some(fps) = fps {
             check_fps(fps)?;
         }
-        let (tmp, mut out) = create_tmp(path)?;
+        let mut stream = Stream::create(path)?;
         let head = serde_json::to_string(&fps)
             .and_then(|fps| Ok((fps, serde_json::to_string(&ARKIT_BLENDSHAPES[..])?)))
-            .map_err(std::io::Error::from)
-            .and_then(|(fps, names)| write!(out, "{{\"fps\":{fps},\"names\":{names},\"frames\":["));
-        let writer = BlendshapesJsonWriter {
-            path: path.to_owned(),
-            tmp,
-            out: Some(out),
-            frames: 0,
-        };
-        head.map_err(|source| writer.io_error(source))?;
-        Ok(writer)
+            .map(|(fps, names)| format!("{{\"fps\":{fps},\"names\":{names},\"frames\":["))
+            .map_err(|e| stream.io_error(e.into()))?;
+        stream.write(head.as_bytes())?;
+        Ok(BlendshapesJsonWriter { stream, frames: 0 })
     }
 
     /// Continues `dir/blendshapes.json`'s temporary file, which holds its head and `frames`
@@ -63,19 +53,13 @@ impl BlendshapesJsonWriter {
     /// # Errors
     /// The temporary file cannot be opened.
     pub fn append_in_dir(dir: &Path, frames: usize) -> Result<BlendshapesJsonWriter, Error> {
-        let path = dir.join(file_names::BLENDSHAPES_JSON);
-        let (tmp, out) = open_tmp_for_append(&path)?;
-        Ok(BlendshapesJsonWriter {
-            path,
-            tmp,
-            out: Some(out),
-            frames,
-        })
+        let stream = Stream::append(&dir.join(file_names::BLENDSHAPES_JSON))?;
+        Ok(BlendshapesJsonWriter { stream, frames })
     }
 
     /// The final path.
     pub fn path(&self) -> &Path {
-        &self.path
+        self.stream.path()
     }
 
     /// Frames written so far.
@@ -88,8 +72,7 @@ impl BlendshapesJsonWriter {
     /// # Errors
     /// The temporary file cannot be written.
     pub fn flush(&mut self) -> Result<(), Error> {
-        let result = self.out.as_mut().map_or(Ok(()), Write::flush);
-        result.map_err(|source| self.io_error(source))
+        self.stream.flush()
     }
 
     /// Appends `frame`.
@@ -97,39 +80,21 @@ impl BlendshapesJsonWriter {
     /// # Errors
     /// A negative or non-finite timestamp or a non-finite value; the file cannot be written.
     pub fn write(&mut self, frame: &BlendshapeFrame) -> Result<(), Error> {
-        frame
-            .check()
-            .map_err(|reason| invalid_frame(&self.path, reason))?;
+        self.stream.check(frame)?;
         let mut text = if self.frames == 0 {
             String::new()
         } else {
             ",".to_owned()
         };
-        text.push_str(
-            &serde_json::to_string(frame).map_err(|e| self.io_error(std::io::Error::from(e)))?,
-        );
-        let result = match self.out.as_mut() {
-            Some(out) => out.write_all(text.as_bytes()),
-            None => Ok(()),
-        };
-        result.map_err(|source| self.io_error(source))?;
+        text.push_str(&serde_json::to_string(frame).map_err(|e| self.stream.io_error(e.into()))?);
+        self.stream.write(text.as_bytes())?;
         self.frames += 1;
         Ok(())
     }
 
     /// Closes the JSON document and moves the file to its final name, which it returns.
-    pub fn finish(mut self) -> Result<PathBuf, Error> {
-        match self.out.take() {
-            Some(out) => finish_tmp(out, b"]}\n", &self.tmp, &self.path),
-            None => Ok(self.path.clone()),
-        }
-    }
-
-    fn io_error(&self, source: std::io::Error) -> Error {
-        Error::Write {
-            path: self.tmp.clone(),
-            source,
-        }
+    pub fn finish(self) -> Result<PathBuf, Error> {
+        self.stream.finish(b"]}\n")
     }
 }
 #[cfg(test)]

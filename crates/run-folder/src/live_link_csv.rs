@@ -29,8 +29,6 @@
 //! own timecode rate is 60 even when it captures at 30 fps, and some importers assume 60:
 //! pass 60 as the rate for those.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use visage_rig::{
@@ -38,7 +36,7 @@ use visage_rig::{
 };
 
 use crate::file_names;
-use crate::stream::{check_fps, create_tmp, finish_tmp, invalid_frame, open_tmp_for_append};
+use crate::stream::{check_fps, Stream};
 use crate::RunFolderError as Error;
 
 /// The Live Link Face timecode `HH:MM:SS:FF.fff` of `timestamp_s` at the timecode rate `fps`:
@@ -69,9 +67,7 @@ fn timecode_frames_per_second(fps: f64) -> u64 {
 /// fails), the rows so far stay under the temporary name, where `visage run --resume` finds
 /// them.
 pub struct LiveLinkCsvWriter {
-    path: PathBuf,
-    tmp: PathBuf,
-    out: Option<BufWriter<File>>,
+    stream: Stream,
     fps: f64,
     rows: usize,
 }
@@ -89,7 +85,7 @@ impl LiveLinkCsvWriter {
     /// `fps` not positive and finite; the temporary file cannot be written.
     pub fn create(path: &Path, fps: f64) -> Result<LiveLinkCsvWriter, Error> {
         check_fps(fps)?;
-        let (tmp, mut out) = create_tmp(path)?;
+        let mut stream = Stream::create(path)?;
         let header = ["Timecode", "BlendShapeCount"]
             .iter()
             .chain(&LIVE_LINK_BLENDSHAPES)
@@ -97,16 +93,12 @@ impl LiveLinkCsvWriter {
             .copied()
             .collect::<Vec<_>>()
             .join(",");
-        let result = writeln!(out, "{header}");
-        let writer = LiveLinkCsvWriter {
-            path: path.to_owned(),
-            tmp,
-            out: Some(out),
+        stream.write(format!("{header}\n").as_bytes())?;
+        Ok(LiveLinkCsvWriter {
+            stream,
             fps,
             rows: 0,
-        };
-        result.map_err(|source| writer.io_error(source))?;
-        Ok(writer)
+        })
     }
 
     /// Continues `dir/blendshapes.csv`'s temporary file, which holds its header and `rows`
@@ -116,20 +108,13 @@ impl LiveLinkCsvWriter {
     /// `fps` not positive and finite; the temporary file cannot be opened.
     pub fn append_in_dir(dir: &Path, fps: f64, rows: usize) -> Result<LiveLinkCsvWriter, Error> {
         check_fps(fps)?;
-        let path = dir.join(file_names::BLENDSHAPES_CSV);
-        let (tmp, out) = open_tmp_for_append(&path)?;
-        Ok(LiveLinkCsvWriter {
-            path,
-            tmp,
-            out: Some(out),
-            fps,
-            rows,
-        })
+        let stream = Stream::append(&dir.join(file_names::BLENDSHAPES_CSV))?;
+        Ok(LiveLinkCsvWriter { stream, fps, rows })
     }
 
     /// The final path.
     pub fn path(&self) -> &Path {
-        &self.path
+        self.stream.path()
     }
 
     /// Rows written so far.
@@ -142,8 +127,7 @@ impl LiveLinkCsvWriter {
     /// # Errors
     /// The temporary file cannot be written.
     pub fn flush(&mut self) -> Result<(), Error> {
-        let result = self.out.as_mut().map_or(Ok(()), Write::flush);
-        result.map_err(|source| self.io_error(source))
+        self.stream.flush()
     }
 
     /// Appends `frame`'s row.
@@ -151,9 +135,7 @@ impl LiveLinkCsvWriter {
     /// # Errors
     /// A negative or non-finite timestamp or a non-finite value; the file cannot be written.
     pub fn write(&mut self, frame: &BlendshapeFrame) -> Result<(), Error> {
-        frame
-            .check()
-            .map_err(|reason| invalid_frame(&self.path, reason))?;
+        self.stream.check(frame)?;
         let mut row = live_link_timecode(frame.timestamp_s, self.fps);
         row.push_str(&format!(",{LIVE_LINK_VALUE_COUNT}"));
         for v in frame.live_link_values() {
@@ -161,28 +143,14 @@ impl LiveLinkCsvWriter {
             row.push_str(&format!(",{:.10}", v + 0.0));
         }
         row.push('\n');
-        let result = match self.out.as_mut() {
-            Some(out) => out.write_all(row.as_bytes()),
-            None => Ok(()),
-        };
-        result.map_err(|source| self.io_error(source))?;
+        self.stream.write(row.as_bytes())?;
         self.rows += 1;
         Ok(())
     }
 
     /// Completes the file and moves it to its final name, which it returns.
-    pub fn finish(mut self) -> Result<PathBuf, Error> {
-        match self.out.take() {
-            Some(out) => finish_tmp(out, b"", &self.tmp, &self.path),
-            None => Ok(self.path.clone()),
-        }
-    }
-
-    fn io_error(&self, source: std::io::Error) -> Error {
-        Error::Write {
-            path: self.tmp.clone(),
-            source,
-        }
+    pub fn finish(self) -> Result<PathBuf, Error> {
+        self.stream.finish(b"")
     }
 }
 

@@ -5,61 +5,107 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+use visage_rig::BlendshapeFrame;
+
 use crate::atomic_write::tmp_path;
 use crate::RunFolderError as Error;
 
-/// Creates `tmp` (a sibling of the final file) for writing.
-pub(crate) fn create_tmp(path: &Path) -> Result<(PathBuf, BufWriter<File>), Error> {
-    let tmp = tmp_path(path);
-    let file = File::create(&tmp).map_err(|source| Error::Write {
-        path: tmp.clone(),
-        source,
-    })?;
-    Ok((tmp, BufWriter::new(file)))
+/// A file streamed under `<name>.tmp`: started or continued, written piece by piece, handed to
+/// the operating system on request, renamed to its name when finished. Dropped unfinished (or
+/// when finishing fails), what was written stays under the temporary name, where
+/// `visage run --resume` finds it.
+pub(crate) struct Stream {
+    path: PathBuf,
+    tmp: PathBuf,
+    out: BufWriter<File>,
 }
 
-/// Opens `path`'s existing temporary sibling for appending.
-pub(crate) fn open_tmp_for_append(path: &Path) -> Result<(PathBuf, BufWriter<File>), Error> {
-    let tmp = tmp_path(path);
-    let file = std::fs::OpenOptions::new()
-        .append(true)
-        .open(&tmp)
-        .map_err(|source| Error::Write {
+impl Stream {
+    /// Starts `path`'s temporary sibling, empty.
+    pub(crate) fn create(path: &Path) -> Result<Stream, Error> {
+        let tmp = tmp_path(path);
+        let file = File::create(&tmp).map_err(|source| Error::Write {
             path: tmp.clone(),
             source,
         })?;
-    Ok((tmp, BufWriter::new(file)))
-}
+        Ok(Stream::new(path, tmp, file))
+    }
 
-/// Writes `tail`, flushes `out` to `tmp` and renames it to `path`; on failure `tmp` stays
-/// (with what it holds).
-pub(crate) fn finish_tmp(
-    mut out: BufWriter<File>,
-    tail: &[u8],
-    tmp: &Path,
-    path: &Path,
-) -> Result<PathBuf, Error> {
-    let result = out
-        .write_all(tail)
-        .and_then(|()| out.into_inner().map_err(|e| e.into_error()))
-        .map_err(|source| Error::Write {
-            path: tmp.to_owned(),
-            source,
+    /// Continues `path`'s existing temporary sibling.
+    pub(crate) fn append(path: &Path) -> Result<Stream, Error> {
+        let tmp = tmp_path(path);
+        let file = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&tmp)
+            .map_err(|source| Error::Write {
+                path: tmp.clone(),
+                source,
+            })?;
+        Ok(Stream::new(path, tmp, file))
+    }
+
+    fn new(path: &Path, tmp: PathBuf, file: File) -> Stream {
+        Stream {
+            path: path.to_owned(),
+            tmp,
+            out: BufWriter::new(file),
+        }
+    }
+
+    /// The final path.
+    pub(crate) fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Appends `bytes`.
+    pub(crate) fn write(&mut self, bytes: &[u8]) -> Result<(), Error> {
+        let result = self.out.write_all(bytes);
+        result.map_err(|source| self.io_error(source))
+    }
+
+    /// Hands what was written to the operating system.
+    pub(crate) fn flush(&mut self) -> Result<(), Error> {
+        let result = self.out.flush();
+        result.map_err(|source| self.io_error(source))
+    }
+
+    /// Why `frame` cannot be written (a non-finite or negative time, a non-finite value), as
+    /// an error naming the file.
+    pub(crate) fn check(&self, frame: &BlendshapeFrame) -> Result<(), Error> {
+        frame.check().map_err(|reason| Error::Write {
+            path: self.path.clone(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidInput, reason),
         })
-        .and_then(|file| {
-            drop(file);
-            std::fs::rename(tmp, path).map_err(|source| Error::Write {
-                path: path.to_owned(),
+    }
+
+    /// Writes `tail`, flushes, and renames the file to its final name, which it returns; on
+    /// failure the temporary file stays (with what it holds).
+    pub(crate) fn finish(mut self, tail: &[u8]) -> Result<PathBuf, Error> {
+        let (tmp, path) = (self.tmp, self.path);
+        let result = self
+            .out
+            .write_all(tail)
+            .and_then(|()| self.out.into_inner().map_err(|e| e.into_error()))
+            .map_err(|source| Error::Write {
+                path: tmp.clone(),
                 source,
             })
-        });
-    result.map(|()| path.to_owned())
-}
+            .and_then(|file| {
+                drop(file);
+                std::fs::rename(&tmp, &path).map_err(|source| Error::Write {
+                    path: path.clone(),
+                    source,
+                })
+            });
+        result.map(|()| path)
+    }
 
-pub(crate) fn invalid_frame(path: &Path, reason: String) -> Error {
-    Error::Write {
-        path: path.to_owned(),
-        source: std::io::Error::new(std::io::ErrorKind::InvalidInput, reason),
+    /// A failure to write the temporary file.
+    pub(crate) fn io_error(&self, source: std::io::Error) -> Error {
+        Error::Write {
+            path: self.tmp.clone(),
+            source,
+        }
     }
 }
 
