@@ -13,11 +13,10 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use indicatif::ProgressBar;
 use visage::{
-    file_names, AlignedNetwork, BlendshapeFrame, Camera, DepthKind, DepthNetwork, DepthSequence,
-    DepthSource, EdgeMask, FaceTarget, FolderOptions, FrameMetrics, FrameSink, Input, Intrinsics,
-    KeptFrames, LandmarksFrame, MeshFrame, MeshKind, ModelSource, NetworkConfig, PlyFormat,
-    Reconstructor, Registration, RgbdLayout, RgbdOptions, RgbdRecording, RigidTransform,
-    TemporalMode, DEFAULT_SUBDIVISION,
+    file_names, AlignedNetwork, Camera, DepthKind, DepthNetwork, DepthSequence, DepthSource,
+    EdgeMask, FaceTarget, FolderOptions, FrameMetrics, FrameSink, Input, Intrinsics, KeptFrames,
+    MeshKind, ModelSource, NetworkConfig, PlyFormat, Reconstructor, Registration, RgbdLayout,
+    RgbdOptions, RgbdRecording, RigidTransform, TemporalMode, DEFAULT_SUBDIVISION,
 };
 
 use crate::commands::export::{exports_into, print_summary, ExportArgs};
@@ -234,11 +233,7 @@ pub enum FacesArg {
 
 /// Refuses an output folder that is not empty, or (with `--overwrite`) removes a previous
 /// run's files from it, saying what it found; with `resume`, a run there is continued.
-pub fn claim_output_folder(
-    out: &std::path::Path,
-    overwrite: bool,
-    resume: bool,
-) -> anyhow::Result<()> {
+fn claim_output_folder(out: &std::path::Path, overwrite: bool, resume: bool) -> anyhow::Result<()> {
     if let Some(cleared) = visage::run_folder::claim(out, overwrite, resume)? {
         eprintln!(
             "--overwrite: removed {} entries of the previous run from {} (it held {})",
@@ -472,24 +467,15 @@ impl PipelineArgs {
     }
 }
 
-/// The output folder with a progress bar and warnings on the terminal.
-struct Terminal<S> {
-    sink: S,
+/// A run's progress on the terminal: the bar, warnings and notices (the results go to the
+/// output folder, not here).
+struct Terminal {
     bar: ProgressBar,
     /// Notices are not printed, and the bar is hidden.
     quiet: bool,
 }
 
-impl<S: FrameSink> FrameSink for Terminal<S> {
-    fn landmarks(&mut self, record: &LandmarksFrame) -> Result<(), visage::Error> {
-        self.sink.landmarks(record)
-    }
-    fn mesh(&mut self, frame: &MeshFrame<'_>) -> Result<(), visage::Error> {
-        self.sink.mesh(frame)
-    }
-    fn blendshapes(&mut self, frame: &BlendshapeFrame) -> Result<(), visage::Error> {
-        self.sink.blendshapes(frame)
-    }
+impl FrameSink for Terminal {
     fn frame_done(&mut self, _: &FrameMetrics) {
         self.bar.inc(1);
     }
@@ -506,10 +492,9 @@ impl<S: FrameSink> FrameSink for Terminal<S> {
     }
 }
 
-/// A progress bar and warnings for a sink that keeps nothing (`visage bench`).
+/// A progress bar and warnings for a run that keeps nothing (`visage bench`).
 pub fn terminal(bar: &ProgressBar) -> impl FrameSink {
     Terminal {
-        sink: (),
         bar: bar.clone(),
         quiet: false,
     }
@@ -624,7 +609,6 @@ fn run_face(
         target,
     };
     let mut progress = Terminal {
-        sink: (),
         bar: ProgressBar::hidden(),
         quiet: p.quiet,
     };
