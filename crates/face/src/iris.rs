@@ -8,6 +8,13 @@ use image::RgbImage;
 
 use crate::{CropEye, Eye, EyeCrop, FaceError, IrisNetwork, NUM_IRIS_POINTS};
 
+/// Where the lids are in [`EyeLandmarks::contour`] (MediaPipe's eye contour: the lower lid from
+/// corner to corner, points 0–8, then the upper lid between the corners, 9–15, then the halos
+/// and the brow): the corners, the lower lid's centre and the upper lid's centre.
+const CONTOUR_CORNERS: [usize; 2] = [0, 8];
+const CONTOUR_LOWER_LID: usize = 4;
+const CONTOUR_UPPER_LID: usize = 12;
+
 /// One eye's landmarks in frame pixels, visage convention (centre of pixel `(i, j)` at
 /// `(i, j)`).
 #[derive(Clone, Debug, PartialEq)]
@@ -34,6 +41,19 @@ impl EyeLandmarks {
     pub fn iris_radius(&self) -> f32 {
         let d = |a: [f32; 3], b: [f32; 3]| (a[0] - b[0]).hypot(a[1] - b[1]);
         0.25 * (d(self.iris[1], self.iris[3]) + d(self.iris[2], self.iris[4]))
+    }
+
+    /// The lids' centres and the eye's corners (frame pixels): upper lid, lower lid, then the
+    /// two corners; `None` without a contour.
+    pub fn lid_points(&self) -> Option<[[f64; 2]; 4]> {
+        let c = &self.contour;
+        let p = |i: usize| c.get(i).map(|p| [p[0] as f64, p[1] as f64]);
+        Some([
+            p(CONTOUR_UPPER_LID)?,
+            p(CONTOUR_LOWER_LID)?,
+            p(CONTOUR_CORNERS[0])?,
+            p(CONTOUR_CORNERS[1])?,
+        ])
     }
 
     fn from_crop(raw: &CropEye, crop: EyeCrop) -> EyeLandmarks {

@@ -1,7 +1,8 @@
 //! The face rig: what a fitted face means to an animator. From the per-frame fit of the
 //! morphable model (ICT-FaceKit's expressions, `visage-morphable`) and the irises, it makes
 //! the 52 ARKit blendshape weights ([`IctToArkit`], its name tables), the eyes'
-//! rotations ([`eye_gaze`], held through blinks by the [`LidGate`]), measured from the
+//! rotations ([`eye_gaze`], held through blinks by the [`LidGate`]), the lids from the eye
+//! network's contour ([`Eyelids`]: blink and wide eyes), measured from the
 //! person's resting face ([`RestPose`]), and the head's rotation, as one [`BlendshapeFrame`] per
 //! frame with Live Link Face's names and signs.
 
@@ -9,6 +10,8 @@
 
 mod arkit;
 mod blendshape_frame;
+mod eye_rig;
+mod eyelids;
 mod gaze;
 mod histogram;
 mod lid_gate;
@@ -21,6 +24,11 @@ pub use blendshape_frame::{
     live_link_angles, BlendshapeFrame, BlendshapeTrack, LIVE_LINK_BLENDSHAPES, LIVE_LINK_ROTATIONS,
     LIVE_LINK_VALUE_COUNT,
 };
+pub use eye_rig::{EyeObservation, EyeRig};
+pub use eyelids::{
+    aperture, Eyelids, LidPoints, LidReading, CLOSED_APERTURE, MIN_OPEN_APERTURE, OPEN_EDGE,
+    OPEN_QUANTILE, WIDE_EDGE, WIDE_FULL,
+};
 pub use gaze::{eye_gaze, eye_look_weights, EyeGaze};
-pub use lid_gate::LidGate;
+pub use lid_gate::{LidGate, HOLD_BLINK};
 pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP};

@@ -23,7 +23,7 @@ use visage_face::CutDetector;
 use visage_face::{
     DistanceSmoother, LandmarkSmoother, CLIP_LATENCY_FRAMES, DEFAULT_DISTANCE_SMOOTHING,
 };
-use visage_rig::LidGate;
+use visage_rig::EyeRig;
 use visage_rig::RestPose;
 use visage_rig::{BlendshapeFrame, IctToArkit};
 use visage_run_folder::LandmarksFrame;
@@ -276,7 +276,7 @@ impl Reconstructor {
             weights: Vec::with_capacity(m.expressions.len()),
             // A depth network is aligned to the fitted model's surface.
             surface: (uses_model || builder.depth.needs_reference()).then(|| Arc::clone(m)),
-            lids: LidGate::default(),
+            eyes: EyeRig::default(),
         });
         let fused_depth = match &builder.depth {
             DepthSource::Face => FusedDepth::Face,

@@ -11,7 +11,8 @@ use image::RgbImage;
 use visage_camera::RigidTransform;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_face::{
-    fit_face_geometry, CanonicalMesh, Eye, Eyes, Face, FaceGeometry, FaceTracker, IrisLandmarker,
+    fit_face_geometry, CanonicalMesh, Eye, EyeLandmarks, Eyes, Face, FaceGeometry, FaceTracker,
+    IrisLandmarker,
 };
 use visage_fusion::{ClipFrame, FaceFrame, FusedSurfaces, MeshKind, ModelFrame, SurfaceFusion};
 use visage_mesh::TriMesh;
@@ -25,10 +26,9 @@ use crate::face_depth::{render_faces_depth, render_surface_depth};
 use crate::Error;
 use visage_face::{face_jumped, CutDetector};
 use visage_face::{DistanceSmoother, LandmarkSmoother};
-use visage_rig::LidGate;
-use visage_rig::{eye_gaze, eye_look_weights, EyeGaze};
 use visage_rig::{lips_closed, RestPose};
-use visage_rig::{live_link_angles, BlendshapeFrame, IctToArkit, ARKIT_BLENDSHAPES};
+use visage_rig::{live_link_angles, BlendshapeFrame, IctToArkit};
+use visage_rig::{EyeObservation, EyeRig, LidPoints};
 use visage_run_folder::{FaceRecord, LandmarksFrame};
 use visage_run_folder::{FrameMetrics, FrameQuality, FrameStatus, PoseMetrics};
 
@@ -100,8 +100,8 @@ pub(crate) struct ModelStage {
     pub weights: Vec<f64>,
     /// The model, when its fitted surface is needed downstream (the model mesh or depth).
     pub surface: Option<Arc<FaceModel>>,
-    /// Holds each eye's gaze while its lid covers the iris.
-    pub lids: LidGate<EyeGaze>,
+    /// The eyes: lids, gaze, and the gaze held through blinks.
+    pub eyes: EyeRig,
 }
 
 impl ModelStage {
@@ -111,7 +111,7 @@ impl ModelStage {
         let start = Instant::now();
         if tracked.face.is_none() || tracked.cut {
             self.fitter.lose_track();
-            self.lids.lose_track();
+            self.eyes.lose_track();
         }
         let Some(face) = &tracked.face else {
             return Ok(());
@@ -139,45 +139,24 @@ impl ModelStage {
                 left: left.map_err(eye_error)?,
             };
             let points = self.fitter.landmark_points();
-            for (eye, corners, left) in [
-                (&eyes.right, [33, 133], false),
-                (&eyes.left, [362, 263], true),
-            ] {
-                let gaze = if self.lids.is_open(left, &face.landmarks_px) {
-                    let c = eye.iris_center();
-                    let corners = corners.map(|i| points[i]);
-                    let gaze = eye_gaze(&self.k, &fit.pose, corners, [c[0] as f64, c[1] as f64])
-                        .map(|g| match &mut self.rest {
-                            Some(rest) => rest.calibrate_gaze(left, g),
-                            None => g,
-                        });
-                    if let Some(g) = gaze {
-                        self.lids.keep(left, g);
-                    }
-                    gaze
-                } else {
-                    // The lid covers the iris: the last gaze of the open eye.
-                    self.lids.held(left)
-                };
-                let Some(gaze) = gaze else {
-                    continue;
-                };
-                let side = if left { "Left" } else { "Right" };
-                let look = eye_look_weights(gaze, left);
-                for (name, w) in ["Up", "Down", "In", "Out"].iter().zip(look) {
-                    let name = format!("eyeLook{name}{side}");
-                    if let Some(i) = ARKIT_BLENDSHAPES.iter().position(|n| *n == name) {
-                        b.weights[i] = w as f32;
-                    }
+            let observe = |eye: &EyeLandmarks, corners: [usize; 2]| {
+                let c = eye.iris_center();
+                EyeObservation {
+                    lids: eye.lid_points().map(|[upper, lower, c0, c1]| LidPoints {
+                        upper,
+                        lower,
+                        corners: [c0, c1],
+                    }),
+                    iris_px: [c[0] as f64, c[1] as f64],
+                    corners: corners.map(|i| points[i]),
                 }
-                // Live Link Face: yaw positive towards the subject's right, pitch down.
-                let angles = [-gaze.yaw as f32, -gaze.pitch as f32, 0.0];
-                if left {
-                    b.left_eye = angles;
-                } else {
-                    b.right_eye = angles;
-                }
-            }
+            };
+            let observed = [
+                observe(&eyes.right, [33, 133]),
+                observe(&eyes.left, [362, 263]),
+            ];
+            self.eyes
+                .apply(&self.k, &fit.pose, observed, self.rest.as_mut(), &mut b);
         }
         metrics.model_fit_px = Some(fit.mean_error_px);
         if let Some(model) = &self.surface {

@@ -1,0 +1,198 @@
+//! Both eyes of a frame into the rig: the lids' blink and wide-eye weights ([`Eyelids`]), and
+//! the gaze from the irises ([`eye_gaze`]) relative to the person's resting gaze, held while
+//! a lid covers the iris ([`LidGate`]), as `eyeLook*` weights and Live Link Face's eye
+//! rotations.
+//!
+//! Blinks are bilateral and the eyes turn together, so the gate holds both eyes' gazes while
+//! either eye's lid covers its iris: a closing lid pushes the iris the network finds down
+//! before the lid's own aperture has dropped much, and the other eye's lid is often a frame
+//! ahead.
+
+use visage_camera::{Intrinsics, RigidTransform};
+
+use crate::eyelids::{aperture, Eyelids, LidPoints};
+use crate::gaze::{eye_gaze, eye_look_weights, EyeGaze};
+use crate::lid_gate::LidGate;
+use crate::{BlendshapeFrame, RestPose, ARKIT_BLENDSHAPES};
+
+/// What the eye networks saw of one eye in a frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EyeObservation {
+    /// The lids and corners from the eye network's contour (frame pixels); `None` without it.
+    pub lids: Option<LidPoints>,
+    /// The iris centre (frame pixels).
+    pub iris_px: [f64; 2],
+    /// The eye's corners on the fitted face (model frame, metres).
+    pub corners: [[f64; 3]; 2],
+}
+
+/// The eyes' state over a clip.
+#[derive(Clone, Debug, Default)]
+pub struct EyeRig {
+    eyelids: Eyelids,
+    gate: LidGate<EyeGaze>,
+}
+
+impl EyeRig {
+    /// Forgets the held gazes (the face was lost); the lids' calibration stays.
+    pub fn lose_track(&mut self) {
+        self.gate.lose_track();
+    }
+
+    /// Writes both eyes (`[right, left]`, the subject's) into `frame`: blink and wide-eye
+    /// weights from the lids (where the contour is missing, the fit's weights stay), the
+    /// `eyeLook*` weights and the eye rotations. `pose` is the head's fitted pose.
+    pub fn apply(
+        &mut self,
+        k: &Intrinsics,
+        pose: &RigidTransform,
+        eyes: [EyeObservation; 2],
+        mut rest: Option<&mut RestPose>,
+        frame: &mut BlendshapeFrame,
+    ) {
+        let mut blinks = [0.0; 2];
+        for (left, eye) in [false, true].into_iter().zip(&eyes) {
+            let center = std::array::from_fn(|i| 0.5 * (eye.corners[0][i] + eye.corners[1][i]));
+            let reading = eye
+                .lids
+                .and_then(|lids| aperture(k, pose, center, &lids))
+                .map(|a| self.eyelids.read(left, a));
+            blinks[left as usize] = match reading {
+                Some(r) => {
+                    set(frame, "eyeBlink", left, r.blink);
+                    set(frame, "eyeWide", left, r.wide);
+                    r.blink
+                }
+                None => get(frame, "eyeBlink", left),
+            };
+        }
+        let blink = blinks[0].max(blinks[1]);
+        for (left, eye) in [false, true].into_iter().zip(&eyes) {
+            let gaze = if self.gate.is_open(left, blink) {
+                let gaze = eye_gaze(k, pose, eye.corners, eye.iris_px).map(|g| match &mut rest {
+                    Some(rest) => rest.calibrate_gaze(left, g),
+                    None => g,
+                });
+                if let Some(g) = gaze {
+                    self.gate.keep(left, g);
+                }
+                gaze
+            } else {
+                // The lid covers the iris: the last gaze of the open eye.
+                self.gate.held(left)
+            };
+            let Some(gaze) = gaze else {
+                continue;
+            };
+            for (name, w) in ["Up", "Down", "In", "Out"]
+                .iter()
+                .zip(eye_look_weights(gaze, left))
+            {
+                set(frame, &format!("eyeLook{name}"), left, w);
+            }
+            // Live Link Face: yaw positive towards the subject's right, pitch down.
+            let angles = [-gaze.yaw as f32, -gaze.pitch as f32, 0.0];
+            if left {
+                frame.left_eye = angles;
+            } else {
+                frame.right_eye = angles;
+            }
+        }
+    }
+}
+
+/// The index of ARKit's `{shape}Left` or `{shape}Right`.
+fn index(shape: &str, left: bool) -> Option<usize> {
+    let name = format!("{shape}{}", if left { "Left" } else { "Right" });
+    ARKIT_BLENDSHAPES.iter().position(|n| *n == name)
+}
+
+fn set(frame: &mut BlendshapeFrame, shape: &str, left: bool, w: f64) {
+    if let Some(i) = index(shape, left) {
+        frame.weights[i] = w as f32;
+    }
+}
+
+fn get(frame: &BlendshapeFrame, shape: &str, left: bool) -> f64 {
+    index(shape, left).map_or(0.0, |i| frame.weights[i] as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A frontal head 0.5 m away, its eyes 30 mm wide, `apertures` open (right, left), the
+    /// irises `drop_m` below the eyes' centres.
+    fn frame(
+        apertures: [f64; 2],
+        drop_m: f64,
+    ) -> (Intrinsics, RigidTransform, [EyeObservation; 2]) {
+        let k = Intrinsics::new(640, 480, 500.0, 500.0, 320.0, 240.0).unwrap();
+        let pose = RigidTransform {
+            rotation: [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]],
+            translation: [0.0, 0.0, 0.5],
+        };
+        let eyes = [-0.03, 0.03].map(|x0: f64| [x0 - 0.015, x0 + 0.015]);
+        let obs = std::array::from_fn(|e| {
+            let [a, b] = eyes[e];
+            let mid = 0.5 * (a + b);
+            let p = |x: f64, y: f64| k.project(pose.apply([x, y, 0.0]));
+            let h = 0.015 * apertures[e];
+            EyeObservation {
+                lids: Some(LidPoints {
+                    upper: p(mid, h),
+                    lower: p(mid, -h),
+                    corners: [p(a, 0.0), p(b, 0.0)],
+                }),
+                iris_px: p(mid, -drop_m),
+                corners: [[a, 0.0, 0.0], [b, 0.0, 0.0]],
+            }
+        });
+        (k, pose, obs)
+    }
+
+    fn look_down(f: &BlendshapeFrame, left: bool) -> f64 {
+        get(f, "eyeLookDown", left)
+    }
+
+    #[test]
+    fn a_blink_of_one_eye_closes_it_and_holds_both_gazes_until_it_lifts() {
+        let mut rig = EyeRig::default();
+        for i in 0..30 {
+            let (k, pose, eyes) = frame([0.33, 0.33], 0.0);
+            let mut f = BlendshapeFrame::new(i, 0.0);
+            rig.apply(&k, &pose, eyes, None, &mut f);
+            assert!(get(&f, "eyeBlink", false) < 0.05 && look_down(&f, false) < 0.01);
+        }
+        // The right lid closes and drags the irises the network finds down by 4 mm.
+        let (k, pose, eyes) = frame([0.05, 0.3], 0.004);
+        let mut f = BlendshapeFrame::new(30, 0.0);
+        rig.apply(&k, &pose, eyes, None, &mut f);
+        assert!(get(&f, "eyeBlink", false) > 0.95, "{:?}", f.weights);
+        assert!(get(&f, "eyeBlink", true) < 0.2, "{:?}", f.weights);
+        assert!(look_down(&f, false) < 0.01 && look_down(&f, true) < 0.01);
+        // Open again, looking down: held one frame more, then followed.
+        let (k, pose, eyes) = frame([0.33, 0.33], 0.004);
+        let mut f = BlendshapeFrame::new(31, 0.0);
+        rig.apply(&k, &pose, eyes, None, &mut f);
+        assert!(look_down(&f, false) < 0.01);
+        let mut f = BlendshapeFrame::new(32, 0.0);
+        rig.apply(&k, &pose, eyes, None, &mut f);
+        assert!(
+            look_down(&f, false) > 0.3 && look_down(&f, true) > 0.3,
+            "{:?}",
+            f.weights
+        );
+    }
+
+    #[test]
+    fn without_a_contour_the_fit_keeps_the_lids() {
+        let mut rig = EyeRig::default();
+        let (k, pose, mut eyes) = frame([0.33, 0.33], 0.0);
+        eyes.iter_mut().for_each(|e| e.lids = None);
+        let mut f = BlendshapeFrame::new(0, 0.0);
+        set(&mut f, "eyeBlink", true, 0.7);
+        rig.apply(&k, &pose, eyes, None, &mut f);
+        assert_eq!(get(&f, "eyeBlink", true), 0.7f32 as f64);
+    }
+}

@@ -1,0 +1,228 @@
+//! The eyelids from the eye network's contour: how far each eye is open, and the blink and
+//! wide-eye weights an animator expects from it.
+//!
+//! The 468-point face mesh barely closes its eyes: on the sample clips a full blink keeps 0.8
+//! of the open aperture there, so a fit to those landmarks reads blinks as 0.05–0.3. The iris
+//! network, run on each eye's crop every frame, also returns the eye's contour, and its lids
+//! close to 0.2–0.45 of the open aperture at the same frames (MediaPipe's attention mesh:
+//! 0.2–0.35). So the blink comes from the contour:
+//!
+//! - **Aperture**: the upper to lower lid centre distance over the corners' distance, both
+//!   measured along the face's own vertical and horizontal axes at the eye (the fitted head
+//!   pose's axes projected through the camera), so turning or tilting the head does not open
+//!   or close the eye ([`aperture`]).
+//! - **Calibration per person**: the eye's open aperture is the [`OPEN_QUANTILE`] of its
+//!   apertures so far (a face's eyes are open most of the time, and a high quantile still holds
+//!   when they are closed for long stretches), but never below [`MIN_OPEN_APERTURE`] (a clip
+//!   that starts with closed eyes). Relative to it, `eyeBlink` rises linearly from
+//!   [`OPEN_EDGE`] (1 − `eyeBlink` = 0: the open eye's frame-to-frame spread stays below it) to
+//!   [`CLOSED_APERTURE`] (closed), and `eyeWide` from [`WIDE_EDGE`] to [`WIDE_FULL`].
+
+use visage_camera::{Intrinsics, RigidTransform};
+
+use crate::histogram::Histogram;
+
+/// One eye's lid points in frame pixels: the upper and lower lid centres and the two corners.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LidPoints {
+    pub upper: [f64; 2],
+    pub lower: [f64; 2],
+    pub corners: [[f64; 2]; 2],
+}
+
+/// The open aperture is this quantile of the eye's apertures so far.
+pub const OPEN_QUANTILE: f64 = 0.75;
+
+/// The open aperture is never taken below this (the eye network's lids of an open adult eye
+/// sit at 0.29–0.36 of its width on the sample clips).
+pub const MIN_OPEN_APERTURE: f64 = 0.22;
+
+/// Relative to the open aperture: where `eyeBlink` starts to rise. On the sample clips 95 % of
+/// the frames whose eyes are open (by MediaPipe's attention mesh) stay above 0.88.
+pub const OPEN_EDGE: f64 = 0.92;
+
+/// Relative to the open aperture: a closed eye (`eyeBlink` 1). The eye network's lids of a
+/// closed eye sit at 0.2–0.45 of the open aperture.
+pub const CLOSED_APERTURE: f64 = 0.3;
+
+/// Relative to the open aperture: where `eyeWide` starts to rise, and where it reaches 1.
+pub const WIDE_EDGE: f64 = 1.1;
+pub const WIDE_FULL: f64 = 1.45;
+
+/// Apertures above this are out of the histogram's range (a wide-open eye is about 0.45).
+const MAX_APERTURE: f64 = 1.0;
+
+/// One eye's reading in a frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LidReading {
+    /// The aperture over the eye's open aperture.
+    pub openness: f64,
+    /// ARKit's `eyeBlink` of the eye, [0, 1].
+    pub blink: f64,
+    /// ARKit's `eyeWide` of the eye, [0, 1].
+    pub wide: f64,
+}
+
+/// The aperture of an eye (upper to lower lid over corner to corner), measured along the face's
+/// axes at the eye: `pose` is the head's (model frame → camera; model x to the face's left-to-
+/// right, y up), `eye_center` the eye's centre in the model frame. `None` when the eye is seen
+/// edge-on or the corners coincide.
+pub fn aperture(
+    k: &Intrinsics,
+    pose: &RigidTransform,
+    eye_center: [f64; 3],
+    lids: &LidPoints,
+) -> Option<f64> {
+    let c = pose.apply(eye_center);
+    if c[2] <= 0.0 {
+        return None;
+    }
+    // Pixels per metre along the face's x and y at the eye: the projection's Jacobian applied
+    // to the rotated axes.
+    let project = |v: [f64; 3]| {
+        [
+            k.fx * (v[0] - c[0] * v[2] / c[2]) / c[2],
+            k.fy * (v[1] - c[1] * v[2] / c[2]) / c[2],
+        ]
+    };
+    let r = &pose.rotation;
+    let ax = project([r[0][0], r[1][0], r[2][0]]);
+    let ay = project([r[0][1], r[1][1], r[2][1]]);
+    let det = ax[0] * ay[1] - ay[0] * ax[1];
+    if det.abs() < 1e-9 * (ax[0].hypot(ax[1]) * ay[0].hypot(ay[1])).max(f64::MIN_POSITIVE) {
+        return None;
+    }
+    // [a, b] with a·ax + b·ay = d: a pixel offset in the face's own axes.
+    let face_axes = |d: [f64; 2]| {
+        [
+            (d[0] * ay[1] - ay[0] * d[1]) / det,
+            (ax[0] * d[1] - d[0] * ax[1]) / det,
+        ]
+    };
+    let sub = |p: [f64; 2], q: [f64; 2]| [p[0] - q[0], p[1] - q[1]];
+    let height = face_axes(sub(lids.upper, lids.lower))[1];
+    let width = face_axes(sub(lids.corners[1], lids.corners[0]))[0].abs();
+    (width > 0.0 && height.is_finite()).then(|| height.max(0.0) / width)
+}
+
+/// Both eyes' open apertures so far (the subject's right eye, then the left).
+#[derive(Clone, Debug)]
+pub struct Eyelids {
+    apertures: [Histogram; 2],
+}
+
+impl Default for Eyelids {
+    fn default() -> Self {
+        Eyelids {
+            apertures: std::array::from_fn(|_| Histogram::new(0.0, MAX_APERTURE)),
+        }
+    }
+}
+
+impl Eyelids {
+    /// Adds the eye's aperture in this frame (`left`: the subject's left eye) and reads its
+    /// blink and wide-eye weights relative to the person's open eye.
+    pub fn read(&mut self, left: bool, aperture: f64) -> LidReading {
+        let hist = &mut self.apertures[left as usize];
+        hist.push(aperture);
+        let open = hist.quantile(OPEN_QUANTILE).max(MIN_OPEN_APERTURE);
+        let openness = aperture / open;
+        LidReading {
+            openness,
+            blink: ((OPEN_EDGE - openness) / (OPEN_EDGE - CLOSED_APERTURE)).clamp(0.0, 1.0),
+            wide: ((openness - WIDE_EDGE) / (WIDE_FULL - WIDE_EDGE)).clamp(0.0, 1.0),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frontal() -> (Intrinsics, RigidTransform) {
+        let k = Intrinsics::new(640, 480, 500.0, 500.0, 320.0, 240.0).unwrap();
+        // Model y up → camera y down: a half turn about x.
+        let pose = RigidTransform {
+            rotation: [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]],
+            translation: [0.0, 0.0, 0.5],
+        };
+        (k, pose)
+    }
+
+    /// An eye 30 mm wide, `aperture` × 30 mm open, centred at the model's origin, as `pose`
+    /// shows it.
+    fn eye(k: &Intrinsics, pose: &RigidTransform, aperture: f64) -> LidPoints {
+        let p = |x: f64, y: f64| k.project(pose.apply([x, y, 0.0]));
+        LidPoints {
+            upper: p(0.0, 0.015 * aperture),
+            lower: p(0.0, -0.015 * aperture),
+            corners: [p(-0.015, 0.0), p(0.015, 0.0)],
+        }
+    }
+
+    #[test]
+    fn the_aperture_does_not_change_as_the_head_turns() {
+        let (k, frontal) = frontal();
+        let a = aperture(&k, &frontal, [0.0; 3], &eye(&k, &frontal, 0.3)).unwrap();
+        assert!((a - 0.3).abs() < 1e-9, "{a}");
+        for (yaw, pitch) in [(0.6f64, 0.0f64), (0.0, 0.4), (-0.5, -0.3)] {
+            let (cy, sy, cp, sp) = (yaw.cos(), yaw.sin(), pitch.cos(), pitch.sin());
+            let turn = [[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]];
+            let tilt = [[1.0, 0.0, 0.0], [0.0, cp, -sp], [0.0, sp, cp]];
+            let m = |a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]| {
+                std::array::from_fn(|i| {
+                    std::array::from_fn(|j| (0..3).map(|l| a[i][l] * b[l][j]).sum())
+                })
+            };
+            let pose = RigidTransform {
+                rotation: m(&frontal.rotation, &m(&turn, &tilt)),
+                translation: [0.02, -0.01, 0.5],
+            };
+            let lids = eye(&k, &pose, 0.3);
+            let a = aperture(&k, &pose, [0.0; 3], &lids).unwrap();
+            // Perspective bends the small eye only slightly.
+            assert!((a - 0.3).abs() < 0.01, "yaw {yaw} pitch {pitch}: {a}");
+            // The image ratio alone does change.
+            let d = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
+            let image = d(lids.upper, lids.lower) / d(lids.corners[0], lids.corners[1]);
+            assert!(
+                (image - 0.3).abs() > 0.015,
+                "yaw {yaw} pitch {pitch}: {image}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_closed_eye_blinks_an_open_one_does_not_and_a_wide_one_widens() {
+        let mut lids = Eyelids::default();
+        for i in 0..200 {
+            // Open at 0.33 ± 3 %, a blink every 50 frames.
+            let a = if i % 50 == 0 {
+                0.08
+            } else {
+                0.33 * (1.0 + 0.03 * ((i % 3) as f64 - 1.0))
+            };
+            let r = lids.read(false, a);
+            if i > 20 && i % 50 != 0 {
+                assert!(r.blink < 0.05 && r.wide == 0.0, "frame {i}: {r:?}");
+            }
+        }
+        let closed = lids.read(false, 0.1);
+        assert!(closed.blink > 0.95, "{closed:?}");
+        let half = lids.read(false, 0.2);
+        assert!(half.blink > 0.3 && half.blink < 0.7, "{half:?}");
+        let wide = lids.read(false, 0.5);
+        assert!(wide.wide > 0.9 && wide.blink == 0.0, "{wide:?}");
+        // The other eye has its own calibration: nothing seen yet, so the floor holds.
+        assert!(lids.read(true, 0.05).blink > 0.95);
+    }
+
+    #[test]
+    fn a_clip_that_starts_with_closed_eyes_reads_them_closed() {
+        let mut lids = Eyelids::default();
+        for _ in 0..100 {
+            let r = lids.read(false, 0.08);
+            assert!(r.blink > 0.6, "{r:?}");
+        }
+    }
+}
