@@ -31,4 +31,4 @@ pub use eyelids::{
 };
 pub use gaze::{eye_gaze, eye_look_weights, EyeGaze};
 pub use lid_gate::{LidGate, HOLD_BLINK};
-pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP};
+pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP, MIN_RANGE};

@@ -18,7 +18,8 @@
 //!   are [`MIN_CLOSED_FRAMES`] of them: ICT-FaceKit's neutral face holds the inner lips 4.5 mm
 //!   apart, so a relaxed closed mouth needs about 0.7 of `mouthPress` — and a talking face's
 //!   lips are apart more often than not, so the 10th percentile of those shapes is 0 and a
-//!   closed mouth read as pressed lips;
+//!   closed mouth read as pressed lips; the range above a rest weight is stretched by at most
+//!   `1 / MIN_RANGE`;
 //! - gaze is relative to its median per eye: the eyeball model's centre and the eye's own
 //!   optical axis (the angle kappa between the visual and the pupillary axis, ~5°) are not
 //!   known per person, and in face capture the eyes rest on the camera.
@@ -34,6 +35,13 @@ use crate::histogram::Histogram;
 
 /// The quantile of a one-sided shape's weights taken as its rest value.
 pub const REST_QUANTILE: f64 = 0.1;
+
+/// The range above a shape's rest weight is stretched to [0, 1], but never by more than
+/// `1 / MIN_RANGE`: a shape that rests near the top of its box (a closed mouth held by 0.8–1.0
+/// of `mouthPress` on the sample clip `lp_d18`, whose fit cannot press harder than 1) would
+/// otherwise turn the frame-to-frame noise at its bound into 0 or 1 (`mouthPressRight` sat at
+/// 1.0 in 31 % of that clip's frames).
+pub const MIN_RANGE: f64 = 0.5;
 
 /// FaceMesh's upper-lid centre landmarks: the subject's right eye, then the left.
 const UPPER_LID: [usize; 2] = [159, 386];
@@ -167,8 +175,7 @@ impl RestPose {
                     rest = closed.quantile(0.5);
                 }
             }
-            let rest = rest.min(0.99);
-            *w = ((*w - rest) / (1.0 - rest)).clamp(0.0, 1.0);
+            *w = ((*w - rest) / (1.0 - rest).max(MIN_RANGE)).clamp(0.0, 1.0);
         }
         for (lid, delta) in lid_values {
             weights[lid.wide] = (delta / lid.up).clamp(0.0, 1.0);
@@ -237,9 +244,11 @@ mod tests {
         let mut at_rest = frame(0.7);
         rest.calibrate(&mut at_rest, true);
         assert!(at_rest[press] < 0.02, "{}", at_rest[press]);
+        // Pressing harder still shows, stretched by at most 1 / MIN_RANGE.
         let mut pressed = frame(0.95);
         rest.calibrate(&mut pressed, true);
-        assert!(pressed[press] > 0.5, "{}", pressed[press]);
+        let expected = (0.95 - 0.7) / MIN_RANGE;
+        assert!((pressed[press] - expected).abs() < 0.02, "{}", pressed[press]);
     }
 
     #[test]
