@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use visage::run_folder::read_live_link_csv;
-use visage::{BlendshapeFrame, Error, FrameSink, LandmarksFrame, Reconstructor};
+use visage::{BlendshapeFrame, Error, FrameSink, Reconstructor};
 use visage_morphable::{IctModel, Region};
 use visage_rig::{live_link_rotation, ARKIT_BLENDSHAPES, ARKIT_BLENDSHAPE_COUNT};
 
@@ -69,7 +69,8 @@ pub struct ExpressionSummary {
     /// RMS distance between the fitted and the rendered neutral face over the narrow face
     /// region (ICT vertices 0–6705) after a rigid alignment without scale, mm.
     pub identity_error_mm: Option<f64>,
-    /// Frames played, frames at rest, frames the pipeline found a face in and gave weights.
+    /// Frames played, frames at rest, frames the pipeline found a face in (and so gave
+    /// weights for).
     pub frames: usize,
     pub rest_frames: usize,
     pub frames_with_face: usize,
@@ -110,19 +111,14 @@ pub struct ExpressionResults {
     pub intrinsics: visage::Intrinsics,
 }
 
-/// What the pipeline gave for each frame.
+/// What the pipeline gave for each frame: its weights and rotations (only frames with a
+/// face get them).
 #[derive(Default)]
 struct Collected {
     weights: BTreeMap<usize, BlendshapeFrame>,
-    faces: usize,
 }
 
 impl FrameSink for Collected {
-    fn landmarks(&mut self, record: &LandmarksFrame) -> Result<(), Error> {
-        self.faces += usize::from(!record.faces.is_empty());
-        Ok(())
-    }
-
     fn blendshapes(&mut self, frame: &BlendshapeFrame) -> Result<(), Error> {
         self.weights.insert(frame.index, frame.clone());
         Ok(())
@@ -160,7 +156,7 @@ pub fn evaluate_expressions(
         (n > 0.0).then(|| sum / n)
     };
     let blinks = results.iter().fold(BlinkCounts::default(), |acc, t| {
-        acc.add(blink_counts(&t.curves))
+        acc + blink_counts(&t.curves)
     });
     let shapes = shape_scores(&all);
     let summary = ExpressionSummary {
@@ -270,7 +266,7 @@ fn evaluate_take(
         identity_error_mm,
         frames: n,
         rest_frames: rest.len(),
-        frames_with_face: curves.read.len().min(sink.faces),
+        frames_with_face: curves.read.len(),
         ms_per_frame,
     };
     Ok(TakeResult {
@@ -320,7 +316,7 @@ fn blink_counts(curves: &Curves) -> BlinkCounts {
             let read: Vec<f32> = curves.read.iter().map(|p| p[w]).collect();
             BlinkCounts::of(&played, &read)
         })
-        .fold(BlinkCounts::default(), BlinkCounts::add)
+        .fold(BlinkCounts::default(), |a, b| a + b)
 }
 
 /// The weight with the largest 99th-percentile change over the frames at rest.

@@ -13,10 +13,13 @@ pub const BLINK_READ: f32 = 0.6;
 /// A played weight below this is an open eye (a read closure there is false).
 pub const OPEN_PLAYED: f32 = 0.2;
 /// A frame is at rest when every played weight lies within this of its take's resting value
-/// ([`rest_frames`]).
-pub const REST_TOLERANCE: f32 = 0.1;
-/// The resting value of a played weight: this quantile of it over the take.
-pub const REST_QUANTILE: f64 = 0.1;
+/// ([`rest_frames`]). On the range-of-motion take `alex_rom_3` 12 % of the frames are at rest
+/// (0.1: 4 %, 0.2: 20 %).
+pub const REST_TOLERANCE: f32 = 0.15;
+/// The resting value of a played weight: this quantile of it over the take (the median: a
+/// performance holds each shape for a minority of its frames, and real resting faces are not
+/// at 0 — this take's lids rest at `eyeBlink` ≈ 0.2).
+pub const REST_QUANTILE: f64 = 0.5;
 
 /// Mean absolute difference; `None` for empty curves.
 ///
@@ -106,16 +109,6 @@ impl BlinkCounts {
             c.hits += 1;
         }
         c
-    }
-
-    /// The sum of two counts (two eyes, two takes).
-    pub fn add(self, other: BlinkCounts) -> BlinkCounts {
-        BlinkCounts {
-            blinks: self.blinks + other.blinks,
-            hits: self.hits + other.hits,
-            open_frames: self.open_frames + other.open_frames,
-            false_closures: self.false_closures + other.false_closures,
-        }
     }
 
     /// Blinks caught / blinks played; `None` without blinks.
@@ -214,6 +207,20 @@ pub fn aligned_rms(a: &[[f64; 3]], b: &[[f64; 3]]) -> Option<f64> {
     rms(&d)
 }
 
+/// The sum of two counts (two eyes, two takes).
+impl std::ops::Add for BlinkCounts {
+    type Output = BlinkCounts;
+
+    fn add(self, other: BlinkCounts) -> BlinkCounts {
+        BlinkCounts {
+            blinks: self.blinks + other.blinks,
+            hits: self.hits + other.hits,
+            open_frames: self.open_frames + other.open_frames,
+            false_closures: self.false_closures + other.false_closures,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -233,7 +240,7 @@ mod tests {
         // Uncorrelated: a symmetric bump against an odd ramp.
         let ramp = [-1.0, -0.5, 0.0, 0.5, 1.0];
         assert!(pearson(&a, &ramp).unwrap().abs() < 1e-12);
-        assert!((mae(&a, &twice).unwrap() - 0.14).abs() < 1e-6);
+        assert!((mae(&a, &twice).unwrap() - 0.16).abs() < 1e-6);
         assert_eq!(mae(&[], &[]), None);
     }
 

@@ -1,7 +1,8 @@
 //! A whole ICT-FaceKit head rendered as a camera would see it, for benchmarks that run the
 //! pipeline on pixels: the face with a real skin texture, the back of the head and neck, the
-//! mouth's socket, gums, tongue and teeth, eyeballs whose irises follow a gaze, and eyelashes
-//! ([`head_texture`] colours them), lit mostly by ambient light since the skin texture
+//! mouth's socket, gums, tongue and teeth, and eyeballs whose irises follow a gaze
+//! ([`head_texture`] colours them; ICT's eyelashes are cards that drawn opaque read as a thick
+//! black eyeliner, so they are left out with the other overlays), lit mostly by ambient light since the skin texture
 //! already carries the clip's light.
 //!
 //! Set-up ([`HeadRender::new`]) reads the neutral mesh once more with its UVs (vertices copied
@@ -49,7 +50,6 @@ mod ranges {
     pub const IRIS_LEFT: Range<usize> = 22221..23021;
     pub const SCLERA_RIGHT: Range<usize> = 23021..23791;
     pub const IRIS_RIGHT: Range<usize> = 23791..24591;
-    pub const LASHES: Range<usize> = 25351..26719;
 }
 
 /// Visible iris radius, metres (the horizontal visible iris diameter of an adult, 11.7 mm,
@@ -283,7 +283,7 @@ pub struct RenderWork {
 
 /// The part a model triangle `t` (model vertex indices) belongs to, from its vertices' ranges
 /// and its first corner's UV tile; `None` for what is not drawn (the inner iris meshes, the
-/// tear film, the eye blend and occlusion overlays).
+/// overlays: tear film, eye blend and occlusion, eyelashes).
 fn part_of(t: &[u32; 3], uv: [f64; 2]) -> Option<Part> {
     let v = t[0] as usize;
     let all_in = |r: Range<usize>| t.iter().all(|&i| r.contains(&(i as usize)));
@@ -293,9 +293,6 @@ fn part_of(t: &[u32; 3], uv: [f64; 2]) -> Option<Part> {
     }
     if any_in(ranges::IRIS_LEFT) || any_in(ranges::IRIS_RIGHT) {
         return None;
-    }
-    if ranges::LASHES.contains(&v) {
-        return Some(Part::Lashes);
     }
     if v >= ranges::IRIS_RIGHT.end {
         return None;
@@ -448,9 +445,6 @@ mod tests {
         assert_eq!(part_of(&[21500, 21501, 21502], [0.3, 0.3]), Some(Part::Eye));
         assert_eq!(part_of(&[22500, 22501, 22502], [0.3, 0.3]), None);
         assert_eq!(part_of(&[24700, 24701, 24702], [4.3, 0.3]), None);
-        assert_eq!(
-            part_of(&[26000, 26001, 26002], [6.3, 0.3]),
-            Some(Part::Lashes)
-        );
+        assert_eq!(part_of(&[26000, 26001, 26002], [6.3, 0.3]), None);
     }
 }

@@ -3,14 +3,14 @@
 //!
 //! ICT-FaceKit lays its materials out as UDIM-like tiles (`u` in [0, 1) the face, [1, 2) the
 //! back of the head with the mouth and eye sockets, [2, 3) gums and tongue, [3, 4) teeth,
-//! [6, 7) eyelashes) and gives each eyeball its own [0, 1]² (the sclera mesh, whose texture
+//! then the overlays) and gives each eyeball its own [0, 1]² (the sclera mesh, whose texture
 //! carries the iris at its front). The atlas puts each [`Part`] in a square tile of
 //! [`ATLAS_COLUMNS`] × [`ATLAS_ROWS`]:
 //!
 //! | row \ column | 0 | 1 | 2 | 3 |
 //! |---|---|---|---|---|
 //! | 0 | face (a real skin texture) | scalp and neck (its mean skin tone) | gums and tongue | teeth |
-//! | 1 | eyeball (sclera, iris, pupil) | mouth and eye sockets (dark) | eyelashes | — |
+//! | 1 | eyeball (sclera, iris, pupil) | mouth and eye sockets (dark) | — | — |
 //!
 //! Colours are linear RGB; the interior ones are darker than the materials themselves since
 //! the renderer casts no shadows and the inside of a mouth is mostly in shade.
@@ -27,13 +27,11 @@ pub const ATLAS_COLUMNS: u32 = 4;
 pub const ATLAS_ROWS: u32 = 2;
 
 /// Gums and tongue, linear RGB (a shaded pink).
-const GUMS: [f32; 3] = [0.30, 0.07, 0.07];
+const GUMS: [f32; 3] = [0.16, 0.035, 0.035];
 /// Teeth, linear RGB (a shaded ivory).
-const TEETH: [f32; 3] = [0.50, 0.45, 0.36];
+const TEETH: [f32; 3] = [0.45, 0.40, 0.32];
 /// The mouth and eye sockets, linear RGB (a dark red-brown).
 const SOCKET: [f32; 3] = [0.035, 0.010, 0.010];
-/// Eyelashes, linear RGB.
-const LASHES: [f32; 3] = [0.018, 0.013, 0.010];
 /// The white of the eye, linear RGB (never paper-white: it is wet, veined and shaded).
 const SCLERA: [f32; 3] = [0.56, 0.50, 0.46];
 /// The iris, linear RGB (a brown iris).
@@ -62,8 +60,6 @@ pub enum Part {
     Teeth,
     /// An eyeball's outer surface (`M_ScleraLeft`/`Right`), iris painted at its front.
     Eye,
-    /// Eyelashes (`M_EyeLashes`).
-    Lashes,
 }
 
 impl Part {
@@ -76,7 +72,6 @@ impl Part {
             Part::Teeth => (3, 0),
             Part::Eye => (0, 1),
             Part::Socket => (1, 1),
-            Part::Lashes => (2, 1),
         }
     }
 
@@ -144,7 +139,6 @@ pub fn head_texture(face: &RgbImage, eye: &EyeLayout) -> Result<Texture, EvalErr
     fill(Part::Gums, &|_, _| GUMS);
     fill(Part::Teeth, &|_, _| TEETH);
     fill(Part::Socket, &|_, _| SOCKET);
-    fill(Part::Lashes, &|_, _| LASHES);
     fill(Part::Eye, &|i, j| {
         let uv = [
             (f64::from(i) + 0.5) / f64::from(t),
