@@ -45,6 +45,9 @@ pub struct ShapeScore {
     pub mae: Option<f64>,
     /// Pearson's r of read against played (`None` where either is constant).
     pub r: Option<f64>,
+    /// The 99th percentile of this weight's change over the frames at rest
+    /// ([`crate::expression_scores::rigid_leak`]; over all takes: the largest take's).
+    pub leak_p99: Option<f64>,
 }
 
 /// The summary figures of a take or of all takes.
@@ -66,6 +69,9 @@ pub struct ExpressionSummary {
     /// RMS over frames of the geodesic angle between the played and the read head rotation
     /// (both in the face frame relative to facing the camera; no offset removed), degrees.
     pub head_rotation_rmse_deg: Option<f64>,
+    /// RMS of the read minus the played Live Link Face `[yaw, pitch, roll]`, degrees: where
+    /// the rotation error lies.
+    pub head_angle_rmse_deg: Option<[f64; 3]>,
     /// RMS distance between the fitted and the rendered neutral face over the narrow face
     /// region (ICT vertices 0–6705) after a rigid alignment without scale, mm.
     pub identity_error_mm: Option<f64>,
@@ -158,7 +164,13 @@ pub fn evaluate_expressions(
     let blinks = results.iter().fold(BlinkCounts::default(), |acc, t| {
         acc + blink_counts(&t.curves)
     });
-    let shapes = shape_scores(&all);
+    let mut shapes = shape_scores(&all, None);
+    for (name, score) in &mut shapes {
+        score.leak_p99 = results
+            .iter()
+            .filter_map(|t| t.shapes[name].leak_p99)
+            .reduce(f64::max);
+    }
     let summary = ExpressionSummary {
         mae: mean_mae(&shapes),
         blink_hit_rate: blinks.hit_rate(),
@@ -181,6 +193,19 @@ pub fn evaluate_expressions(
                 }
             }
             (n > 0.0).then(|| (sum / n).sqrt())
+        },
+        head_angle_rmse_deg: {
+            let (mut sum, mut n) = ([0.0; 3], 0.0);
+            for t in &results {
+                if let Some(v) = t.summary.head_angle_rmse_deg {
+                    let w = t.summary.frames_with_face as f64;
+                    for c in 0..3 {
+                        sum[c] += v[c] * v[c] * w;
+                    }
+                    n += w;
+                }
+            }
+            (n > 0.0).then(|| sum.map(|s| (s / n).sqrt()))
         },
         identity_error_mm: weighted(|s| s.identity_error_mm),
         frames,
@@ -233,6 +258,7 @@ fn evaluate_take(
     let mut curves = Curves::default();
     let mut read_poses = Vec::new();
     let mut played_poses = Vec::new();
+    let mut angle_errors: [Vec<f64>; 3] = Default::default();
     for (i, played) in replay.frames.iter().enumerate() {
         if let Some(b) = sink.weights.get(&i) {
             curves.time_s.push(played.time_s);
@@ -240,6 +266,9 @@ fn evaluate_take(
             curves.read.push(b.weights);
             read_poses.push(live_link_rotation(b.head.map(f64::from)));
             played_poses.push(live_link_rotation(played.pose.angles));
+            for (c, errors) in angle_errors.iter_mut().enumerate() {
+                errors.push((f64::from(b.head[c]) - played.pose.angles[c]).to_degrees());
+            }
         }
     }
     let rotation_errors: Vec<f64> = read_poses
@@ -253,7 +282,7 @@ fn evaluate_take(
         Some(fitted) => identity_error(model, &replay.identity, &fitted.neutral_mesh().vertices)?,
         None => None,
     };
-    let shapes = shape_scores(&curves);
+    let shapes = shape_scores(&curves, Some(&rest));
     let blinks = blink_counts(&curves);
     let summary = ExpressionSummary {
         mae: mean_mae(&shapes),
@@ -261,8 +290,15 @@ fn evaluate_take(
         false_closure_rate: blinks.false_closure_rate(),
         rigid_leak_p99: (!leak.is_empty())
             .then(|| f64::from(quantile_sorted(&leak, LEAK_QUANTILE))),
-        rigid_leak_worst: worst_leak(&curves, &rest),
+        rigid_leak_worst: shapes
+            .iter()
+            .filter_map(|(name, s)| s.leak_p99.map(|v| (name.clone(), v)))
+            .reduce(|a, b| if b.1 > a.1 { b } else { a }),
         head_rotation_rmse_deg: rms(&rotation_errors),
+        head_angle_rmse_deg: match angle_errors.each_ref().map(|e| rms(e)) {
+            [Some(y), Some(p), Some(r)] => Some([y, p, r]),
+            _ => None,
+        },
         identity_error_mm,
         frames: n,
         rest_frames: rest.len(),
@@ -277,19 +313,25 @@ fn evaluate_take(
     })
 }
 
-/// Each shape's MAE and r over `curves`.
-fn shape_scores(curves: &Curves) -> BTreeMap<String, ShapeScore> {
+/// Each shape's MAE and r over `curves`, and its leak over the frames at `rest` when given.
+fn shape_scores(curves: &Curves, rest: Option<&[usize]>) -> BTreeMap<String, ShapeScore> {
     ARKIT_BLENDSHAPES
         .iter()
         .enumerate()
         .map(|(w, name)| {
             let played: Vec<f32> = curves.played.iter().map(|p| p[w]).collect();
             let read: Vec<f32> = curves.read.iter().map(|p| p[w]).collect();
+            let leak_p99 = rest.and_then(|rest| {
+                let one = |v: &[f32]| v.iter().map(|&x| [x]).collect::<Vec<[f32; 1]>>();
+                let leak = rigid_leak(&one(&played), &one(&read), rest);
+                (!leak.is_empty()).then(|| f64::from(quantile_sorted(&leak, LEAK_QUANTILE)))
+            });
             (
                 name.to_string(),
                 ShapeScore {
                     mae: mae(&played, &read),
                     r: pearson(&played, &read),
+                    leak_p99,
                 },
             )
         })
@@ -317,23 +359,6 @@ fn blink_counts(curves: &Curves) -> BlinkCounts {
             BlinkCounts::of(&played, &read)
         })
         .fold(BlinkCounts::default(), |a, b| a + b)
-}
-
-/// The weight with the largest 99th-percentile change over the frames at rest.
-fn worst_leak(curves: &Curves, rest: &[usize]) -> Option<(String, f64)> {
-    (0..ARKIT_BLENDSHAPE_COUNT)
-        .filter_map(|w| {
-            let played: Vec<[f32; 1]> = curves.played.iter().map(|p| [p[w]]).collect();
-            let read: Vec<[f32; 1]> = curves.read.iter().map(|p| [p[w]]).collect();
-            let leak = rigid_leak(&played, &read, rest);
-            (!leak.is_empty()).then(|| {
-                (
-                    ARKIT_BLENDSHAPES[w].to_string(),
-                    f64::from(quantile_sorted(&leak, LEAK_QUANTILE)),
-                )
-            })
-        })
-        .reduce(|a, b| if b.1 > a.1 { b } else { a })
 }
 
 /// The fitted neutral face (`fitted`: the compact model's face region, ICT's vertex order)

@@ -112,12 +112,18 @@ pub fn expression_table(results: &ExpressionResults) -> String {
     if let Some((name, v)) = &results.summary.rigid_leak_worst {
         let _ = writeln!(s, "largest leak: {name} (p99 {v:.3})");
     }
-    let _ = writeln!(s);
-    let _ = write!(s, "{:<18}", "MAE / r");
-    for t in &results.takes {
-        let _ = write!(s, " {:>16}", truncate(&t.take, 16));
+    if let Some([y, p, r]) = results.summary.head_angle_rmse_deg {
+        let _ = writeln!(
+            s,
+            "head angle RMSE: yaw {y:.2}°, pitch {p:.2}°, roll {r:.2}°"
+        );
     }
-    let _ = writeln!(s, " {:>16}", "all");
+    let _ = writeln!(s);
+    let _ = write!(s, "{:<18}", "MAE / r / leak");
+    for t in &results.takes {
+        let _ = write!(s, " {:>20}", truncate(&t.take, 20));
+    }
+    let _ = writeln!(s, " {:>20}", "all");
     for name in TABLE_SHAPES {
         let _ = write!(s, "{name:<18}");
         for shapes in results
@@ -127,11 +133,13 @@ pub fn expression_table(results: &ExpressionResults) -> String {
             .chain([&results.shapes])
         {
             let sc = &shapes[name];
-            let _ = write!(
-                s,
-                " {:>16}",
-                format!("{} / {}", fmt(sc.mae, 3), fmt(sc.r, 2))
+            let cell = format!(
+                "{} / {} / {}",
+                fmt(sc.mae, 3),
+                fmt(sc.r, 2),
+                fmt(sc.leak_p99, 2)
             );
+            let _ = write!(s, " {cell:>20}");
         }
         let _ = writeln!(s);
     }
