@@ -61,6 +61,8 @@ pub struct ExpressionSummary {
     pub blink_hit_rate: Option<f64>,
     /// Frames with a played `eyeBlink*` < 0.2 whose read one is ≥ 0.6, over those frames.
     pub false_closure_rate: Option<f64>,
+    /// The counts behind the two rates.
+    pub blinks: BlinkCounts,
     /// The 99th percentile, over every weight and every frame at rest, of the read weight's
     /// change ([`crate::expression_scores::rigid_leak`]).
     pub rigid_leak_p99: Option<f64>,
@@ -175,6 +177,7 @@ pub fn evaluate_expressions(
         mae: mean_mae(&shapes),
         blink_hit_rate: blinks.hit_rate(),
         false_closure_rate: blinks.false_closure_rate(),
+        blinks,
         rigid_leak_p99: results
             .iter()
             .filter_map(|t| t.summary.rigid_leak_p99)
@@ -288,6 +291,7 @@ fn evaluate_take(
         mae: mean_mae(&shapes),
         blink_hit_rate: blinks.hit_rate(),
         false_closure_rate: blinks.false_closure_rate(),
+        blinks,
         rigid_leak_p99: (!leak.is_empty())
             .then(|| f64::from(quantile_sorted(&leak, LEAK_QUANTILE))),
         rigid_leak_worst: shapes
