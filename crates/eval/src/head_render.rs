@@ -33,7 +33,7 @@ use visage_rig::{live_link_rotation, EyeGaze, ICT_EXPRESSIONS};
 
 use crate::face_texture::face_texture;
 use crate::head_pose_track::HeadPose;
-use crate::head_texture::{head_texture, EyeLayout, Part};
+use crate::head_texture::{head_texture, paint_lids, EyeLayout, Part, LID_SKIN_M};
 use crate::{EvalError, PIVOT_DEPTH_M};
 
 /// The ICT vertex ranges of the head's parts (ICT-FaceKit's README; checked on the OBJ's
@@ -138,7 +138,9 @@ impl HeadRender {
             triangles.push(tri);
         }
         let eye = eye_layout(&model, &with_uvs, ranges::SCLERA_LEFT);
-        let texture = head_texture(face, &eye)?;
+        let mut face = face.clone();
+        paint_lids(&mut face, &lid_triangles(&model, &with_uvs));
+        let texture = head_texture(&face, &eye)?;
         Ok(HeadRender {
             model,
             source,
@@ -310,6 +312,33 @@ fn part_of(t: &[u32; 3], uv: [f64; 2]) -> Option<Part> {
         return Some(Part::Face);
     }
     Some(Part::Scalp)
+}
+
+/// The face triangles' UVs with, per corner, how far a blink moves it (the larger of
+/// `eyeBlink_L` and `eyeBlink_R`'s displacement, metres); empty without those expressions.
+fn lid_triangles(model: &IctModel, with_uvs: &TriMesh) -> Vec<([[f64; 2]; 3], [f64; 3])> {
+    let blinks: Vec<&Vec<[f64; 3]>> = ["eyeBlink_L", "eyeBlink_R"]
+        .iter()
+        .filter_map(|n| model.expression_index(n))
+        .map(|i| &model.expression_modes[i])
+        .collect();
+    if blinks.is_empty() {
+        return Vec::new();
+    }
+    let moved = |v: u32| {
+        blinks
+            .iter()
+            .map(|b| visage_camera::vec3::norm(b[v as usize]))
+            .fold(0.0, f64::max)
+    };
+    model
+        .triangles
+        .iter()
+        .zip(&with_uvs.triangles)
+        .filter(|(t, u)| part_of(t, with_uvs.uvs[u[0] as usize]) == Some(Part::Face))
+        .map(|(t, u)| (u.map(|j| with_uvs.uvs[j as usize]), t.map(moved)))
+        .filter(|(_, d)| d.iter().any(|&d| d > LID_SKIN_M.0))
+        .collect()
 }
 
 /// The eyeball's centre: the middle of its vertices' bounding box.

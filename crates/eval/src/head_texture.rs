@@ -149,6 +149,96 @@ pub fn head_texture(face: &RgbImage, eye: &EyeLayout) -> Result<Texture, EvalErr
     Ok(Texture::new(w, h, texels)?)
 }
 
+/// How far a blink moves a point of the lids (metres) where the face texture starts to be
+/// painted over with lid skin, and where it is lid skin only.
+pub const LID_SKIN_M: (f64, f64) = (0.002, 0.005);
+
+/// How far a blink moves the lid's margin (metres): from the first value the lid skin darkens
+/// into the lash line, fully at the second (ICT-FaceKit's upper lid margin moves 9.5 mm).
+pub const LASH_LINE_M: (f64, f64) = (0.0075, 0.009);
+
+/// The lash line's colour as a fraction of the lid skin's.
+const LASH_LINE_SHADE: f64 = 0.25;
+
+/// Paints lid skin over the parts of the eyelids that a blink brings over the eye, in the
+/// face texture `face` (square, ICT's face UVs): a clip with open eyes sees those parts folded
+/// away, so the texture fused from it holds the eye's own colours there (sclera, iris,
+/// lashes), and a closed lid would show them. `lids` are the face triangles' UVs with how far
+/// a blink moves each corner; a texel is blended toward the lid's skin by
+/// `smoothstep(LID_SKIN_M.0, LID_SKIN_M.1, d)` of its interpolated motion `d`, and the margin
+/// ([`LASH_LINE_M`]) darkens into a lash line, which a closed eye shows. The lid's skin
+/// is the texture's mean colour (linear light) over the texels a blink moves less than
+/// [`LID_SKIN_M`]`.0` (the lid's seen skin beside them).
+pub fn paint_lids(face: &mut RgbImage, lids: &[([[f64; 2]; 3], [f64; 3])]) {
+    let t = face.width() as usize;
+    if t == 0 || face.height() as usize != t || lids.is_empty() {
+        return;
+    }
+    let mut moved = vec![f64::NAN; t * t];
+    for (uv, d) in lids {
+        let q = uv.map(|p| [p[0] * t as f64 - 0.5, (1.0 - p[1]) * t as f64 - 0.5]);
+        let area =
+            (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]);
+        if area.abs() < 1e-12 {
+            continue;
+        }
+        let lo = |c: usize| q.iter().map(|p| p[c]).fold(f64::INFINITY, f64::min);
+        let hi = |c: usize| q.iter().map(|p| p[c]).fold(f64::NEG_INFINITY, f64::max);
+        let (x0, x1) = (
+            lo(0).ceil().max(0.0) as usize,
+            hi(0).floor().min(t as f64 - 1.0),
+        );
+        let (y0, y1) = (
+            lo(1).ceil().max(0.0) as usize,
+            hi(1).floor().min(t as f64 - 1.0),
+        );
+        if x1 < 0.0 || y1 < 0.0 {
+            continue;
+        }
+        for y in y0..=y1 as usize {
+            for x in x0..=x1 as usize {
+                let (px, py) = (x as f64, y as f64);
+                let edge = |a: [f64; 2], b: [f64; 2]| {
+                    ((b[0] - a[0]) * (py - a[1]) - (px - a[0]) * (b[1] - a[1])) / area
+                };
+                let b = [edge(q[1], q[2]), edge(q[2], q[0]), edge(q[0], q[1])];
+                if b.iter().all(|&w| w >= -1e-9) {
+                    moved[y * t + x] = b[0] * d[0] + b[1] * d[1] + b[2] * d[2];
+                }
+            }
+        }
+    }
+    let linear: [f32; 256] = std::array::from_fn(|c| srgb_to_linear_u8(c as u8));
+    let (mut sum, mut n) = ([0.0f64; 3], 0.0);
+    for (p, &d) in face.pixels().zip(&moved) {
+        if d < LID_SKIN_M.0 {
+            for c in 0..3 {
+                sum[c] += f64::from(linear[p.0[c] as usize]);
+            }
+            n += 1.0;
+        }
+    }
+    if n == 0.0 {
+        return;
+    }
+    let skin = sum.map(|s| s / n);
+    let smoothstep = |(a, b): (f64, f64), d: f64| {
+        let x = ((d - a) / (b - a)).clamp(0.0, 1.0);
+        x * x * (3.0 - 2.0 * x)
+    };
+    for (p, &d) in face.pixels_mut().zip(&moved) {
+        if !(d > LID_SKIN_M.0) {
+            continue;
+        }
+        let w = smoothstep(LID_SKIN_M, d);
+        let shade = 1.0 - (1.0 - LASH_LINE_SHADE) * smoothstep(LASH_LINE_M, d);
+        for c in 0..3 {
+            let v = (1.0 - w) * f64::from(linear[p.0[c] as usize]) + w * shade * skin[c];
+            p.0[c] = visage_mesh::color::linear_to_srgb_u8(v as f32);
+        }
+    }
+}
+
 /// The eyeball's colour at its UV `uv`: pupil, iris with radial streaks, the limbal ring,
 /// then the sclera, a little redder toward the back.
 fn eye_color(eye: &EyeLayout, uv: [f64; 2]) -> [f32; 3] {
@@ -245,5 +335,31 @@ mod tests {
         let corner = atlas.texel(1, 64 + 1, visage_render::Wrap::Clamp);
         assert!(corner[0] > 0.3, "{corner:?}");
         assert!(head_texture(&RgbImage::new(4, 8), &eye).is_err());
+    }
+
+    #[test]
+    fn lids_are_painted_with_the_skin_beside_them() {
+        // A grey texture with a blue "eye" band across the middle; one quad over the whole UV
+        // square, whose upper half a blink moves 8 mm and lower half not at all.
+        let mut face = RgbImage::from_pixel(32, 32, image::Rgb([150, 120, 100]));
+        for x in 0..32 {
+            for y in 1..5 {
+                face.put_pixel(x, y, image::Rgb([40, 60, 160]));
+            }
+        }
+        let (lo, mid, hi) = (0.0, 0.5, 1.0);
+        let lids = [
+            ([[lo, mid], [hi, mid], [hi, hi]], [0.0, 0.0, 0.008]),
+            ([[lo, mid], [hi, hi], [lo, hi]], [0.0, 0.008, 0.008]),
+            ([[lo, lo], [hi, lo], [hi, mid]], [0.0, 0.0, 0.0]),
+        ];
+        paint_lids(&mut face, &lids);
+        // The band near the top (moved over 5 mm) is skin now; the skin below is untouched.
+        let p = face.get_pixel(16, 3).0;
+        assert!(
+            (i32::from(p[0]) - 150).abs() <= 2 && (i32::from(p[2]) - 100).abs() <= 2,
+            "{p:?}"
+        );
+        assert_eq!(face.get_pixel(16, 28).0, [150, 120, 100]);
     }
 }
