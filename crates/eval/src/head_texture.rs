@@ -227,7 +227,7 @@ pub fn paint_lids(face: &mut RgbImage, lids: &[([[f64; 2]; 3], [f64; 3])]) {
         x * x * (3.0 - 2.0 * x)
     };
     for (p, &d) in face.pixels_mut().zip(&moved) {
-        if !(d > LID_SKIN_M.0) {
+        if d.is_nan() || d <= LID_SKIN_M.0 {
             continue;
         }
         let w = smoothstep(LID_SKIN_M, d);
