@@ -9,6 +9,8 @@ pub enum EvalError {
     Morphable(#[from] visage_morphable::MorphableError),
     #[error(transparent)]
     Camera(#[from] visage_camera::CameraError),
+    #[error(transparent)]
+    Mesh(#[from] visage_mesh::io::MeshIoError),
     #[error("rendering: {0}")]
     Render(#[from] visage_render::RenderError),
     #[error("fusion: {0}")]

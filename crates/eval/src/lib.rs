@@ -11,6 +11,13 @@
 //! time per frame) → [`write_results`] (`results.json`, `results.csv`, SVG plots) and
 //! [`table`].
 //!
+//! From pixels ([`evaluate_expressions`], `visage eval expressions`): a recorded ARKit take
+//! ([`Replay`]) drives a rendered ICT-FaceKit head ([`HeadRender`]: a real skin texture,
+//! eyes that follow the take's gaze, a mouth interior) under a seeded head motion
+//! ([`HeadPoseTrack`]); the whole pipeline runs on the renders as `visage run` runs a video,
+//! and its 52 weights, head rotation and identity are scored against what was played
+//! ([`expression_scores`]; [`write_expression_results`], [`expression_table`]).
+//!
 //! On real clips, where there is no truth: [`evaluate_video`] runs the pipeline four ways
 //! (per-frame fit, streaming, causal, clip mode) and [`evaluate_clip`] measures each against
 //! filters on the tracked landmarks (`visage eval video`).
@@ -23,7 +30,15 @@
 mod benchmark;
 mod clip_runs;
 mod error;
+mod expression_benchmark;
+mod expression_replay;
+mod expression_report;
+pub mod expression_scores;
+mod face_texture;
 mod first_frames;
+mod head_pose_track;
+mod head_render;
+mod head_texture;
 mod method;
 pub mod metrics;
 pub mod model_fit;
@@ -51,7 +66,17 @@ pub use benchmark::{
 };
 pub use clip_runs::{evaluate_video, VideoOptions};
 pub use error::{ClipRunError, EvalError};
+pub use expression_benchmark::{
+    evaluate_expressions, Curves, ExpressionOptions, ExpressionResults, ExpressionSummary,
+    ShapeScore, TakeResult, LEAK_QUANTILE,
+};
+pub use expression_replay::{gazes, IdentityChoice, PlayedFrame, Replay, ReplayOptions};
+pub use expression_report::{expression_table, write_expression_results, TABLE_SHAPES};
+pub use face_texture::face_texture;
 pub use first_frames::write_first_frames;
+pub use head_pose_track::{HeadMotion, HeadPose, HeadPoseTrack};
+pub use head_render::{HeadRender, RenderWork, BACKGROUND, IRIS_RADIUS_M, PUPIL_RADIUS_M};
+pub use head_texture::{head_texture, EyeLayout, Part, ATLAS_COLUMNS, ATLAS_ROWS};
 pub use method::{
     AnchoredInput, Method, MethodInput, MethodRun, ModelInput, VertexKind,
     BENCHMARK_FAIRING_LENGTH_M,

@@ -219,6 +219,12 @@ impl IctModel {
         })
     }
 
+    /// The neutral mesh file the model was read from (its UVs and materials are read from it
+    /// by those who need them).
+    pub fn neutral_path(&self) -> PathBuf {
+        self.dir.join(NEUTRAL_FILE)
+    }
+
     /// Number of vertices #V.
     pub fn vertex_count(&self) -> usize {
         self.neutral.len()

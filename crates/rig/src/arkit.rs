@@ -291,6 +291,51 @@ impl IctToArkit {
     }
 }
 
+/// The 52 ARKit weights → ICT-FaceKit weights: the inverse of [`IctToArkit`], to drive the
+/// ICT model with a recorded ARKit performance (a Live Link Face take). Each ICT expression
+/// takes the weight of the ARKit shape it makes ([`ICT_TO_ARKIT`]); both halves of a split
+/// pair (`browInnerUp`, `cheekPuff`) take the whole shape's weight, so that
+/// `IctToArkit::weights(ArkitToIct::weights(a)) = a` for every `a` in [0, 1]⁵² whose
+/// `tongueOut` is 0 (ICT has no tongue shape). Build it once, apply it per frame.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ArkitToIct {
+    /// For each ICT expression of the target order, its ARKit weight's index.
+    sources: Vec<Option<usize>>,
+}
+
+impl ArkitToIct {
+    /// The mapping into expressions named `ict_names` (e.g. `IctModel::expression_names`), in
+    /// that order; a name that is not an ICT expression gets weight 0.
+    pub fn new<S: AsRef<str>>(ict_names: &[S]) -> ArkitToIct {
+        let source = |name: &str| {
+            ICT_TO_ARKIT.iter().position(|s| match *s {
+                IctSource::Shape(a) => a == name,
+                IctSource::MeanOf(a, b) => a == name || b == name,
+                IctSource::Zero => false,
+            })
+        };
+        ArkitToIct {
+            sources: ict_names.iter().map(|n| source(n.as_ref())).collect(),
+        }
+    }
+
+    /// The ICT weights, one per name given to [`ArkitToIct::new`], for ARKit weights `arkit`
+    /// in [`ARKIT_BLENDSHAPES`]' order, each clamped to [0, 1] (NaN reads as 0).
+    pub fn weights(&self, arkit: &[f32; ARKIT_BLENDSHAPE_COUNT]) -> Vec<f64> {
+        self.sources
+            .iter()
+            .map(|s| {
+                let v = s.map_or(0.0, |i| f64::from(arkit[i]));
+                if v.is_nan() {
+                    0.0
+                } else {
+                    v.clamp(0.0, 1.0)
+                }
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -369,6 +414,46 @@ mod tests {
         assert_eq!(a[arkit("jawOpen")], 0.9);
         assert_eq!(a[arkit("browInnerUp")], 0.3);
         assert_eq!(a.iter().filter(|&&v| v != 0.0).count(), 2);
+    }
+
+    #[test]
+    fn arkit_to_ict_round_trips_and_keeps_the_sides() {
+        let to_ict = ArkitToIct::new(&ICT_EXPRESSIONS);
+        let to_arkit = IctToArkit::all();
+        let mut a = [0.0f32; ARKIT_BLENDSHAPE_COUNT];
+        for (i, w) in a.iter_mut().enumerate().take(ARKIT_BLENDSHAPE_COUNT - 1) {
+            // Distinct values in [0, 1], exact in f32 and f64.
+            *w = (i as f32 + 1.0) / 64.0;
+        }
+        let ict = to_ict.weights(&a);
+        assert_eq!(ict.len(), ICT_EXPRESSIONS.len());
+        assert_eq!(to_arkit.weights(&ict), a);
+        let arkit = |name: &str| ARKIT_BLENDSHAPES.iter().position(|&n| n == name).unwrap();
+        let ict_at = |name: &str| ICT_EXPRESSIONS.iter().position(|&n| n == name).unwrap();
+        // ARKit's Left is ICT's _L (the subject's left); a split pair gives both halves.
+        assert_eq!(
+            ict[ict_at("eyeBlink_L")],
+            f64::from(a[arkit("eyeBlinkLeft")])
+        );
+        assert_eq!(
+            ict[ict_at("mouthSmile_R")],
+            f64::from(a[arkit("mouthSmileRight")])
+        );
+        assert_eq!(
+            ict[ict_at("browInnerUp_L")],
+            f64::from(a[arkit("browInnerUp")])
+        );
+        assert_eq!(
+            ict[ict_at("browInnerUp_R")],
+            f64::from(a[arkit("browInnerUp")])
+        );
+        // Out-of-range weights are clamped; another order and unknown names are honoured.
+        let mut b = [0.0f32; ARKIT_BLENDSHAPE_COUNT];
+        b[arkit("jawOpen")] = 1.5;
+        b[arkit("cheekPuff")] = -1.0;
+        b[arkit("tongueOut")] = 1.0;
+        let subset = ArkitToIct::new(&["cheekPuff_R", "jawOpen", "tongue"]);
+        assert_eq!(subset.weights(&b), vec![0.0, 1.0, 0.0]);
     }
 
     #[test]

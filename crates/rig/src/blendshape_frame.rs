@@ -225,6 +225,23 @@ pub fn live_link_angles(r: &[[f64; 3]; 3]) -> [f32; 3] {
     ]
 }
 
+/// The rotation of Live Link Face angles `[yaw, pitch, roll]` (radians, the module's signs):
+/// `R_y(−yaw) · R_x(pitch) · R_z(roll)` (row-major, applied to column vectors, in the face
+/// frame of [`live_link_angles`], of which it is the inverse for |pitch| < 90°).
+pub fn live_link_rotation(angles: [f64; 3]) -> [[f64; 3]; 3] {
+    let [yaw, pitch, roll] = angles;
+    let (sy, cy) = (-yaw).sin_cos();
+    let (sp, cp) = pitch.sin_cos();
+    let (sr, cr) = roll.sin_cos();
+    let r_y = [[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]];
+    let r_x = [[1.0, 0.0, 0.0], [0.0, cp, -sp], [0.0, sp, cp]];
+    let r_z = [[cr, -sr, 0.0], [sr, cr, 0.0], [0.0, 0.0, 1.0]];
+    let mul = |a: [[f64; 3]; 3], b: [[f64; 3]; 3]| -> [[f64; 3]; 3] {
+        std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+    };
+    mul(mul(r_y, r_x), r_z)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -245,6 +262,22 @@ mod tests {
 
     fn apply(r: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
         std::array::from_fn(|i| (0..3).map(|k| r[i][k] * v[k]).sum())
+    }
+
+    #[test]
+    fn live_link_rotation_inverts_the_angles() {
+        for angles in [[0.3, -0.2, 0.1], [-0.7, 0.4, -0.25], [0.0, 0.0, 0.0]] {
+            let r = live_link_rotation(angles);
+            let expected = mul(
+                &mul(&rot(1, -angles[0]), &rot(0, angles[1])),
+                &rot(2, angles[2]),
+            );
+            assert_eq!(r, expected);
+            let back = live_link_angles(&r);
+            for (a, b) in back.iter().zip(angles) {
+                assert!((f64::from(*a) - b).abs() < 1e-6, "{back:?} vs {angles:?}");
+            }
+        }
     }
 
     #[test]

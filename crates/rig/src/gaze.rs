@@ -77,6 +77,25 @@ pub fn eye_look_weights(gaze: EyeGaze, left_eye: bool) -> [f64; 4] {
     [w(gaze.pitch), w(-gaze.pitch), inward, outward]
 }
 
+/// The gaze that ARKit's `eyeLook{Up,Down,In,Out}` weights `look` of one eye stand for: the
+/// inverse of [`eye_look_weights`] for weights of which at most one of each opposing pair is
+/// non-zero (opposing weights cancel). Each weight is clamped to [0, 1]; a weight of 1 is a
+/// turn of [`EYE_LOOK_FULL_RAD`].
+pub fn eye_look_gaze(look: [f64; 4], left_eye: bool) -> EyeGaze {
+    let [up, down, inward, outward] =
+        look.map(|w| if w.is_nan() { 0.0 } else { w.clamp(0.0, 1.0) });
+    // The left eye looks out towards the subject's left (positive yaw), the right eye in.
+    let towards_left = if left_eye {
+        outward - inward
+    } else {
+        inward - outward
+    };
+    EyeGaze {
+        yaw: towards_left * EYE_LOOK_FULL_RAD,
+        pitch: (up - down) * EYE_LOOK_FULL_RAD,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -129,5 +148,24 @@ mod tests {
         assert_eq!(look[1], 1.0);
         assert_eq!(look[2], 0.0);
         assert!((look[3] - 0.2 / EYE_LOOK_FULL_RAD).abs() < 1e-12);
+    }
+
+    #[test]
+    fn eye_look_weights_and_their_gaze_invert_each_other() {
+        for left in [false, true] {
+            for (yaw, pitch) in [(0.2, -0.1), (-0.3, 0.25), (0.0, 0.0), (0.436, -0.436)] {
+                let gaze = EyeGaze { yaw, pitch };
+                let back = eye_look_gaze(eye_look_weights(gaze, left), left);
+                assert!((back.yaw - yaw).abs() < 1e-12, "{left} {yaw}: {back:?}");
+                assert!(
+                    (back.pitch - pitch).abs() < 1e-12,
+                    "{left} {pitch}: {back:?}"
+                );
+            }
+        }
+        // Looking in turns the left eye towards the subject's right, the right eye to the left.
+        assert!(eye_look_gaze([0.0, 0.0, 1.0, 0.0], true).yaw < 0.0);
+        assert!(eye_look_gaze([0.0, 0.0, 1.0, 0.0], false).yaw > 0.0);
+        assert!(eye_look_gaze([1.0, 0.0, 0.0, 0.0], true).pitch > 0.0);
     }
 }

@@ -18,17 +18,18 @@ mod lid_gate;
 mod rest_pose;
 
 pub use arkit::{
-    IctSource, IctToArkit, ARKIT_BLENDSHAPES, ARKIT_BLENDSHAPE_COUNT, ICT_EXPRESSIONS, ICT_TO_ARKIT,
+    ArkitToIct, IctSource, IctToArkit, ARKIT_BLENDSHAPES, ARKIT_BLENDSHAPE_COUNT, ICT_EXPRESSIONS,
+    ICT_TO_ARKIT,
 };
 pub use blendshape_frame::{
-    live_link_angles, BlendshapeFrame, BlendshapeTrack, LIVE_LINK_BLENDSHAPES, LIVE_LINK_ROTATIONS,
-    LIVE_LINK_VALUE_COUNT,
+    live_link_angles, live_link_rotation, BlendshapeFrame, BlendshapeTrack, LIVE_LINK_BLENDSHAPES,
+    LIVE_LINK_ROTATIONS, LIVE_LINK_VALUE_COUNT,
 };
 pub use eye_rig::{EyeObservation, EyeRig};
 pub use eyelids::{
     aperture, Eyelids, LidPoints, LidReading, CLOSED_APERTURE, MIN_OPEN_APERTURE, OPEN_EDGE,
     OPEN_QUANTILE, WIDE_EDGE, WIDE_FULL,
 };
-pub use gaze::{eye_gaze, eye_look_weights, EyeGaze};
+pub use gaze::{eye_gaze, eye_look_gaze, eye_look_weights, EyeGaze, EYE_LOOK_FULL_RAD};
 pub use lid_gate::{LidGate, HOLD_BLINK};
 pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP, MIN_RANGE};

@@ -34,7 +34,9 @@ pub use error::RunFolderError;
 pub use folder::{claim, clear_outputs, inspect, Cleared, FolderContents};
 pub use json_records::scan_frames;
 pub use landmarks::{FaceRecord, LandmarksFrame, PoseRecord};
-pub use live_link_csv::{live_link_timecode, LiveLinkCsvWriter};
+pub use live_link_csv::{
+    live_link_timecode, read_live_link_csv, LiveLinkCsvWriter, LiveLinkRow, LiveLinkTake,
+};
 pub use metrics::{
     DepthAlignmentMetrics, DepthAlignmentSummary, FrameMetrics, FrameQuality, FrameStatus,
     FusedAndRaw, KeypointMotionMetrics, KeypointMotionSummary, MeshSummary, Percentiles,

@@ -51,6 +51,167 @@ pub fn live_link_timecode(timestamp_s: f64, fps: f64) -> String {
     format!("{h:02}:{m:02}:{s:02}:{frame:02}.{sub:03}")
 }
 
+/// The app's own timecode rate, taken when a take spans no second boundary (nothing in it
+/// tells the rate then).
+const APP_TIMECODE_RATE: u32 = 60;
+/// Timecode rates a take's rate is inferred from (frames counted per timecode second).
+const TIMECODE_RATES: [u32; 7] = [24, 25, 30, 48, 50, 60, 120];
+
+/// One row of a Live Link Face take that has tracking.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LiveLinkRow {
+    /// The row's position among the file's data rows (0 = the line after the header).
+    pub row: usize,
+    /// Seconds since the take's first row, from the timecodes.
+    pub time_s: f64,
+    /// The 52 weights in ARKit's order ([`visage_rig::ARKIT_BLENDSHAPES`]), read by name.
+    pub weights: [f32; visage_rig::ARKIT_BLENDSHAPE_COUNT],
+}
+
+/// A Live Link Face CSV read back ([`read_live_link_csv`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LiveLinkTake {
+    /// The rows with tracking, in file order.
+    pub rows: Vec<LiveLinkRow>,
+    /// Rows left out because the app had lost tracking (`BlendShapeCount` 0).
+    pub lost_rows: usize,
+    /// The timecode rate the timecodes were read at: the smallest common rate above every
+    /// frame number `FF` in the file when the take crosses a second, else the app's 60.
+    pub timecode_rate: u32,
+}
+
+impl LiveLinkTake {
+    /// The take's frame rate: one over the median step between rows' times; `None` with
+    /// fewer than two rows or no positive step.
+    pub fn frame_rate(&self) -> Option<f64> {
+        let mut steps: Vec<f64> = self
+            .rows
+            .windows(2)
+            .map(|w| w[1].time_s - w[0].time_s)
+            .filter(|d| *d > 0.0)
+            .collect();
+        steps.sort_by(f64::total_cmp);
+        steps.get(steps.len() / 2).map(|d| 1.0 / d)
+    }
+}
+
+/// A timecode `HH:MM:SS:FF.fff` as (whole seconds, frame number + thousandths of a frame).
+fn parse_timecode(text: &str) -> Option<(u64, f64)> {
+    let mut parts = text.trim().split(':');
+    let mut field = || parts.next()?.parse::<f64>().ok();
+    let (h, m, s, f) = (field()?, field()?, field()?, field()?);
+    let whole = [h, m, s].iter().all(|v| v.fract() == 0.0 && *v >= 0.0);
+    (whole && f >= 0.0).then_some(((h * 3600.0 + m * 60.0 + s) as u64, f))
+}
+
+/// Reads a Live Link Face CSV (the module's docs; as the app exports it or as
+/// [`LiveLinkCsvWriter`] writes it): the 52 blendshapes by their column names, in any column
+/// order, rows whose `BlendShapeCount` is 0 (lost tracking) skipped, times from the timecodes.
+///
+/// # Errors
+/// An unreadable file, a header without `Timecode`, `BlendShapeCount` or one of the 52
+/// blendshapes, a row with too few values, an unreadable number or timecode, no row with
+/// tracking — each naming the file and the row.
+pub fn read_live_link_csv(path: &Path) -> Result<LiveLinkTake, Error> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+        path: path.to_owned(),
+        source,
+    })?;
+    let bad = |reason: String| Error::Input {
+        path: path.to_owned(),
+        reason,
+    };
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines
+        .next()
+        .ok_or_else(|| bad("empty file".into()))?
+        .split(',')
+        .map(str::trim)
+        .collect();
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or_else(|| bad(format!("no column {name} in the header")))
+    };
+    let timecode = column("Timecode")?;
+    let count = column("BlendShapeCount")?;
+    let shapes = LIVE_LINK_BLENDSHAPES
+        .iter()
+        .map(|n| column(n))
+        .collect::<Result<Vec<usize>, Error>>()?;
+    let mut parsed = Vec::new();
+    let mut lost_rows = 0;
+    for (row, line) in lines.enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let values: Vec<&str> = line.split(',').map(str::trim).collect();
+        if values.len() < header.len() {
+            return Err(bad(format!(
+                "row {row}: {} values, the header has {}",
+                values.len(),
+                header.len()
+            )));
+        }
+        let number = |i: usize| {
+            values[i].parse::<f32>().map_err(|_| {
+                bad(format!(
+                    "row {row}, {}: not a number: {}",
+                    header[i], values[i]
+                ))
+            })
+        };
+        if number(count)? == 0.0 {
+            lost_rows += 1;
+            continue;
+        }
+        let time = parse_timecode(values[timecode])
+            .ok_or_else(|| bad(format!("row {row}: not a timecode: {}", values[timecode])))?;
+        let mut weights = [0.0f32; visage_rig::ARKIT_BLENDSHAPE_COUNT];
+        for (w, &i) in weights.iter_mut().zip(&shapes) {
+            *w = number(i)?;
+        }
+        parsed.push((row, time, weights));
+    }
+    let largest_frame = parsed.iter().map(|(_, (_, f), _)| *f).fold(0.0, f64::max);
+    let crosses_a_second = parsed.windows(2).any(|w| w[0].1 .0 != w[1].1 .0);
+    let timecode_rate = if crosses_a_second {
+        TIMECODE_RATES
+            .into_iter()
+            .find(|&r| largest_frame < f64::from(r))
+            .ok_or_else(|| {
+                bad(format!(
+                    "frame number {largest_frame} beyond any timecode rate"
+                ))
+            })?
+    } else {
+        APP_TIMECODE_RATE.max(
+            TIMECODE_RATES
+                .into_iter()
+                .find(|&r| largest_frame < f64::from(r))
+                .unwrap_or(0),
+        )
+    };
+    let seconds = |(s, f): (u64, f64)| s as f64 + f / f64::from(timecode_rate);
+    let start = parsed
+        .first()
+        .map(|(_, t, _)| seconds(*t))
+        .ok_or_else(|| bad("no row with tracking".into()))?;
+    Ok(LiveLinkTake {
+        rows: parsed
+            .into_iter()
+            .map(|(row, t, weights)| LiveLinkRow {
+                row,
+                time_s: seconds(t) - start,
+                weights,
+            })
+            .collect(),
+        lost_rows,
+        timecode_rate,
+    })
+}
+
 /// Frames counted per timecode second: `fps` when it is a whole number, else `ceil(fps)`.
 fn timecode_frames_per_second(fps: f64) -> u64 {
     let whole = fps.round();
@@ -181,6 +342,68 @@ pub(crate) mod tests {
         f.left_eye = [-0.25, 0.125, 0.0];
         f.right_eye = [-0.2, 0.125, -0.01];
         f
+    }
+
+    #[test]
+    fn takes_read_back_by_name_skipping_lost_rows_with_times_from_timecodes() {
+        let dir = tempfile::tempdir().unwrap();
+        // 1.5 s at 30 Hz on a 60-frame timecode (as the app writes): frames step by 2.
+        let mut w = LiveLinkCsvWriter::in_dir(dir.path(), 60.0).unwrap();
+        for i in 0..45 {
+            w.write(&sample_frame(i, i as f64 / 30.0)).unwrap();
+        }
+        let csv = w.finish().unwrap();
+        // A row the app lost tracking in, as real exports have them.
+        let mut text = std::fs::read_to_string(&csv).unwrap();
+        let zeros = vec!["0"; LIVE_LINK_VALUE_COUNT].join(",");
+        text.push_str(&format!("00:00:01:32.000,0,{zeros}\n"));
+        std::fs::write(&csv, &text).unwrap();
+        let take = read_live_link_csv(&csv).unwrap();
+        assert_eq!(take.rows.len(), 45);
+        assert_eq!(take.lost_rows, 1);
+        assert_eq!(take.timecode_rate, 60);
+        assert!((take.frame_rate().unwrap() - 30.0).abs() < 1e-6);
+        for (i, row) in take.rows.iter().enumerate() {
+            assert_eq!(row.row, i);
+            assert!(
+                (row.time_s - i as f64 / 30.0).abs() < 1e-6,
+                "row {i}: {}",
+                row.time_s
+            );
+            let expected = sample_frame(i, 0.0).weights;
+            for (a, b) in row.weights.iter().zip(expected) {
+                assert!((a - b).abs() < 1e-6, "row {i}: {a} vs {b}");
+            }
+        }
+        // Columns are read by name: swap two and the weights follow.
+        let joined: Vec<String> = text
+            .lines()
+            .map(|l| {
+                let mut v: Vec<&str> = l.split(',').collect();
+                v.swap(2, 3);
+                v.join(",")
+            })
+            .collect();
+        let swapped = dir.path().join("swapped.csv");
+        std::fs::write(&swapped, joined.join("\n")).unwrap();
+        assert_eq!(read_live_link_csv(&swapped).unwrap(), take);
+        // A missing blendshape column is named.
+        let cut = dir.path().join("cut.csv");
+        std::fs::write(&cut, text.replacen("JawOpen", "Jaw", 1)).unwrap();
+        let e = read_live_link_csv(&cut).unwrap_err().to_string();
+        assert!(e.contains("no column JawOpen"), "{e}");
+    }
+
+    #[test]
+    fn a_take_within_one_second_reads_at_the_apps_timecode_rate() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut w = LiveLinkCsvWriter::in_dir(dir.path(), 60.0).unwrap();
+        for i in 0..4 {
+            w.write(&sample_frame(i, i as f64 / 60.0)).unwrap();
+        }
+        let take = read_live_link_csv(&w.finish().unwrap()).unwrap();
+        assert_eq!(take.timecode_rate, 60);
+        assert!((take.frame_rate().unwrap() - 60.0).abs() < 1e-6);
     }
 
     #[test]

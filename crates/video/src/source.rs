@@ -74,6 +74,16 @@ pub enum FrameSource {
         fps: Option<f64>,
         times: Option<Vec<f64>>,
     },
+    /// Frames made by the caller as they are asked for (a renderer, a capture callback), of
+    /// `width × height` pixels, `count` of them when known, at `fps` when known
+    /// ([`FrameSource::generated`]).
+    Generated {
+        frames: Box<dyn Iterator<Item = Result<Frame, VideoError>> + Send>,
+        width: u32,
+        height: u32,
+        count: Option<usize>,
+        fps: Option<f64>,
+    },
 }
 
 impl FrameSource {
@@ -147,6 +157,25 @@ impl FrameSource {
         })
     }
 
+    /// Frames from `frames`, each `width × height` pixels, made one at a time as the source is
+    /// read (on the reading thread); `count` is how many there will be and `fps` their rate,
+    /// when known. The frames keep the index and timestamp they are made with.
+    pub fn generated(
+        width: u32,
+        height: u32,
+        count: Option<usize>,
+        fps: Option<f64>,
+        frames: impl Iterator<Item = Result<Frame, VideoError>> + Send + 'static,
+    ) -> FrameSource {
+        FrameSource::Generated {
+            frames: Box::new(frames),
+            width,
+            height,
+            count,
+            fps: fps.filter(|f| f.is_finite() && *f > 0.0),
+        }
+    }
+
     /// Gives images the frame rate they were taken at: image `i` is then at `i / fps`
     /// seconds ([`Frame::timestamp_s`]). Without it images have no timestamps. A video keeps
     /// its own timestamps and ignores this; an `fps` that is not positive and finite is ignored.
@@ -164,7 +193,7 @@ impl FrameSource {
     pub fn frame_rate(&self) -> Option<f64> {
         match self {
             FrameSource::Video(v) => v.info().fps,
-            FrameSource::Images { fps, .. } => *fps,
+            FrameSource::Images { fps, .. } | FrameSource::Generated { fps, .. } => *fps,
         }
     }
 }
@@ -175,6 +204,7 @@ impl Iterator for FrameSource {
     fn next(&mut self) -> Option<Self::Item> {
         match self {
             FrameSource::Video(v) => v.next(),
+            FrameSource::Generated { frames, .. } => frames.next(),
             FrameSource::Images {
                 paths,
                 next,

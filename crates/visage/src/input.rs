@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use visage_run_folder::FrameSelection;
-use visage_video::{focal_length_35mm, is_image_path, read_image, Frame, FrameSource};
+use visage_video::{focal_length_35mm, is_image_path, read_image, Frame, FrameSource, VideoError};
 
 use crate::Error;
 
@@ -71,8 +71,32 @@ impl Input {
         Input::from_source(path, FrameSource::timed_images(paths, times, fps)?)
     }
 
+    /// Frames the caller makes as they are read (on the decoding thread; e.g. renders of a
+    /// synthetic face), `width × height` pixels, `count` of them when known, at `fps` when
+    /// known, named `path` in records and messages ([`FrameSource::generated`]).
+    pub fn generated(
+        path: &Path,
+        width: u32,
+        height: u32,
+        count: Option<usize>,
+        fps: Option<f64>,
+        frames: impl Iterator<Item = Result<Frame, VideoError>> + Send + 'static,
+    ) -> Input {
+        Input::with_size(
+            path,
+            FrameSource::generated(width, height, count, fps, frames),
+            (width, height, count),
+        )
+    }
+
     fn from_source(path: &Path, source: FrameSource) -> Result<Input, Error> {
-        let (width, height, frame_count) = match &source {
+        let size = match &source {
+            FrameSource::Generated {
+                width,
+                height,
+                count,
+                ..
+            } => (*width, *height, *count),
             FrameSource::Video(reader) => {
                 let info = reader.info();
                 (info.width, info.height, info.frame_count)
@@ -92,7 +116,15 @@ impl Input {
                 (w, h, Some(paths.len()))
             }
         };
-        Ok(Input {
+        Ok(Input::with_size(path, source, size))
+    }
+
+    fn with_size(
+        path: &Path,
+        source: FrameSource,
+        (width, height, frame_count): (u32, u32, Option<usize>),
+    ) -> Input {
+        Input {
             path: path.to_owned(),
             source,
             width,
@@ -104,7 +136,7 @@ impl Input {
             kept: 0,
             copies: None,
             stop: None,
-        })
+        }
     }
 
     /// Keeps only the frames whose index is a multiple of `every` (they keep their index).
@@ -205,7 +237,7 @@ impl Input {
                 let first = paths.first()?;
                 focal_length_35mm(first).map(|f| (first.clone(), f))
             }
-            FrameSource::Video(_) => None,
+            FrameSource::Video(_) | FrameSource::Generated { .. } => None,
         }
     }
 }

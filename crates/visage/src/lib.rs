@@ -99,4 +99,4 @@ pub use visage_run_folder::{
     file_names, write_atomically, write_json_atomically, FrameMetrics, FrameSelection, FrameStatus,
     LandmarksFrame, OutputDir, Report, RunStatus, RunSummary,
 };
-pub use visage_video::Frame;
+pub use visage_video::{Frame, VideoError};

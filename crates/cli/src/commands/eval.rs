@@ -35,6 +35,11 @@ pub enum EvalCommand {
     /// filters on the tracked landmarks (jitter, deviation, lag, per region); writes
     /// OUT/results.json and a jitter-against-deviation chart (SVG) per clip, prints a table.
     Video(super::eval_video::VideoArgs),
+    /// Recorded ARKit takes (Live Link Face CSV) replayed on a rendered ICT-FaceKit head under
+    /// a moving head pose, run through the pipeline as a video, and its 52 weights, head
+    /// rotation and identity scored against the played ones: writes OUT/results.json and a
+    /// plot per take and shape (SVG), prints a table.
+    Expressions(Box<super::eval_expressions::ExpressionsArgs>),
 }
 
 /// Arguments of `visage eval synthetic`.
@@ -149,6 +154,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     match args.command {
         EvalCommand::Synthetic(a) => synthetic(*a),
         EvalCommand::Video(a) => super::eval_video::video(a),
+        EvalCommand::Expressions(a) => super::eval_expressions::expressions(*a),
     }
 }
 

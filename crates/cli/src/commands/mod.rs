@@ -4,6 +4,7 @@ pub mod batch;
 pub mod bench;
 pub mod bench_solver;
 pub mod eval;
+pub mod eval_expressions;
 pub mod eval_video;
 pub mod export;
 pub mod fair;
