@@ -9,7 +9,7 @@
 //!
 //! | row \ column | 0 | 1 | 2 | 3 |
 //! |---|---|---|---|---|
-//! | 0 | face (a real skin texture) | scalp and neck (its mean skin tone) | gums and tongue | teeth |
+//! | 0 | face (a real skin texture) | scalp and neck (the texture's border skin tone) | gums and tongue | teeth |
 //! | 1 | eyeball (sclera, iris, pupil) | mouth and eye sockets (dark) | — | — |
 //!
 //! Colours are linear RGB; the interior ones are darker than the materials themselves since
@@ -115,7 +115,7 @@ pub fn head_texture(face: &RgbImage, eye: &EyeLayout) -> Result<Texture, EvalErr
         });
     }
     let linear: [f32; 256] = std::array::from_fn(|c| srgb_to_linear_u8(c as u8));
-    let skin = mean_skin(face, &linear);
+    let skin = border_skin(face, &linear);
     let (w, h) = (t * ATLAS_COLUMNS, t * ATLAS_ROWS);
     let mut texels = vec![[0.0f32; 4]; w as usize * h as usize];
     let mut fill = |part: Part, color: &dyn Fn(u32, u32) -> [f32; 3]| {
@@ -266,27 +266,29 @@ fn eye_color(eye: &EyeLayout, uv: [f64; 2]) -> [f32; 3] {
     ]
 }
 
-/// The face texture's mean colour over its central quarter (cheeks, nose, forehead's lower
-/// part: skin wherever the clip saw the face), linear RGB.
-fn mean_skin(face: &RgbImage, linear: &[f32; 256]) -> [f32; 3] {
-    let t = face.width();
-    let mut sum = [0.0f64; 3];
-    let mut n = 0.0;
-    for j in t / 4..3 * t / 4 {
-        for i in t / 4..3 * t / 4 {
-            let p = face.get_pixel(i, j).0;
-            if p.iter().all(|&c| c > 8) {
-                for c in 0..3 {
-                    sum[c] += f64::from(linear[p[c] as usize]);
-                }
-                n += 1.0;
-            }
-        }
+/// The face texture's most frequent colour (by 4-bit bins per channel; the mean of the bin),
+/// linear RGB: the flat colour the texture fusion gives what the clip never saw, which is also
+/// what borders the scalp (the face region's edge, the neck), so the two meet without a seam.
+fn border_skin(face: &RgbImage, linear: &[f32; 256]) -> [f32; 3] {
+    let bin =
+        |p: &[u8; 3]| (p[0] as usize >> 4) << 8 | (p[1] as usize >> 4) << 4 | p[2] as usize >> 4;
+    let mut counts = vec![0usize; 1 << 12];
+    for p in face.pixels() {
+        counts[bin(&p.0)] += 1;
     }
-    if n == 0.0 {
+    let Some(mode) = (0..counts.len()).max_by_key(|&b| counts[b]) else {
+        return crate::SKIN_ALBEDO;
+    };
+    if counts[mode] == 0 {
         return crate::SKIN_ALBEDO;
     }
-    sum.map(|s| (s / n) as f32)
+    let mut sum = [0.0f64; 3];
+    for p in face.pixels().filter(|p| bin(&p.0) == mode) {
+        for c in 0..3 {
+            sum[c] += f64::from(linear[p.0[c] as usize]);
+        }
+    }
+    sum.map(|s| (s / counts[mode] as f64) as f32)
 }
 
 /// A deterministic value in [−1, 1] per integer cell.
