@@ -248,7 +248,11 @@ mod tests {
         let mut pressed = frame(0.95);
         rest.calibrate(&mut pressed, true);
         let expected = (0.95 - 0.7) / MIN_RANGE;
-        assert!((pressed[press] - expected).abs() < 0.02, "{}", pressed[press]);
+        assert!(
+            (pressed[press] - expected).abs() < 0.02,
+            "{}",
+            pressed[press]
+        );
     }
 
     #[test]
