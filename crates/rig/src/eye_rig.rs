@@ -3,6 +3,10 @@
 //! a lid covers the iris ([`LidGate`]), as `eyeLook*` weights and Live Link Face's eye
 //! rotations.
 //!
+//! As the head turns away, the eye on the far side is seen ever more obliquely, partly behind
+//! the nose, and its contour's lids drift: from [`FAR_EYE_FROM_DEG`] of turn it takes the near
+//! eye's lids, wholly from [`FAR_EYE_FULL_DEG`] (a wink of the far eye is then lost).
+//!
 //! Blinks are bilateral and the eyes turn together, so the gate holds both eyes' gazes while
 //! either eye's lid covers its iris: a closing lid pushes the iris the network finds down
 //! before the lid's own aperture has dropped much, and the other eye's lid is often a frame
@@ -10,7 +14,7 @@
 
 use visage_camera::{Intrinsics, RigidTransform};
 
-use crate::eyelids::{aperture, Eyelids, LidPoints};
+use crate::eyelids::{aperture, Eyelids, LidPoints, LidReading};
 use crate::gaze::{eye_gaze, eye_look_weights, EyeGaze};
 use crate::lid_gate::LidGate;
 use crate::{BlendshapeFrame, RestPose, ARKIT_BLENDSHAPES};
@@ -50,13 +54,29 @@ impl EyeRig {
         mut rest: Option<&mut RestPose>,
         frame: &mut BlendshapeFrame,
     ) {
-        let mut blinks = [0.0; 2];
+        let centers = eyes.map(|e| -> [f64; 3] {
+            std::array::from_fn(|i| 0.5 * (e.corners[0][i] + e.corners[1][i]))
+        });
+        let mut readings = [None; 2];
         for (left, eye) in [false, true].into_iter().zip(&eyes) {
-            let center = std::array::from_fn(|i| 0.5 * (eye.corners[0][i] + eye.corners[1][i]));
-            let reading = eye
+            readings[left as usize] = eye
                 .lids
-                .and_then(|lids| aperture(k, pose, center, &lids))
+                .and_then(|lids| aperture(k, pose, centers[left as usize], &lids))
                 .map(|a| self.eyelids.read(left, a));
+        }
+        // The eye turned away from the camera takes the other's lids as the turn grows.
+        let far = far_eye(pose, centers);
+        if let (Some((far, share)), [Some(right), Some(left)]) = (far, readings) {
+            let (f, n) = if far { (left, right) } else { (right, left) };
+            let mix = |a: f64, b: f64| (1.0 - share) * a + share * b;
+            readings[far as usize] = Some(LidReading {
+                openness: mix(f.openness, n.openness),
+                blink: mix(f.blink, n.blink),
+                wide: mix(f.wide, n.wide),
+            });
+        }
+        let mut blinks = [0.0; 2];
+        for (left, reading) in [false, true].into_iter().zip(readings) {
             blinks[left as usize] = match reading {
                 Some(r) => {
                     set(frame, "eyeBlink", left, r.blink);
@@ -99,6 +119,26 @@ impl EyeRig {
             }
         }
     }
+}
+
+/// The head's turn from the camera (degrees of yaw) from which the eye turned away takes the
+/// other eye's lids, and at which it takes them wholly.
+pub const FAR_EYE_FROM_DEG: f64 = 15.0;
+pub const FAR_EYE_FULL_DEG: f64 = 30.0;
+
+/// The eye turned away from the camera (`true`: the subject's left) and how much of the other
+/// eye's lids it takes, for a head at `pose` with its eyes' centres at `centers` (`[right,
+/// left]`, model frame); `None` when neither is turned away by [`FAR_EYE_FROM_DEG`].
+fn far_eye(pose: &RigidTransform, centers: [[f64; 3]; 2]) -> Option<(bool, f64)> {
+    let mid: [f64; 3] = std::array::from_fn(|i| 0.5 * (centers[0][i] + centers[1][i]));
+    let camera = pose.apply_inverse([0.0; 3]);
+    let v: [f64; 3] = std::array::from_fn(|i| camera[i] - mid[i]);
+    let yaw = v[0].atan2(v[2]).to_degrees();
+    let share =
+        ((yaw.abs() - FAR_EYE_FROM_DEG) / (FAR_EYE_FULL_DEG - FAR_EYE_FROM_DEG)).clamp(0.0, 1.0);
+    // The far eye lies on the side the camera is not.
+    let left_side = centers[1][0] - centers[0][0];
+    (share > 0.0).then_some((v[0] * left_side < 0.0, share))
 }
 
 /// The index of ARKit's `{shape}Left` or `{shape}Right`.
@@ -183,6 +223,31 @@ mod tests {
             "{:?}",
             f.weights
         );
+    }
+
+    #[test]
+    fn the_eye_turned_away_takes_the_near_eye_lids_as_the_head_turns() {
+        let centers = [[-0.03, 0.0, 0.0], [0.03, 0.0, 0.0]];
+        let posed = |yaw_deg: f64| {
+            let (c, s) = (yaw_deg.to_radians().cos(), yaw_deg.to_radians().sin());
+            // Model → camera: a half turn about x (frontal), after a turn about the model's y.
+            let yaw = [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]];
+            let frontal = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
+            RigidTransform {
+                rotation: std::array::from_fn(|i| {
+                    std::array::from_fn(|j| (0..3).map(|k| frontal[i][k] * yaw[k][j]).sum())
+                }),
+                translation: [0.0, 0.0, 0.5],
+            }
+        };
+        assert_eq!(far_eye(&posed(5.0), centers), None);
+        let (far, share) = far_eye(&posed(40.0), centers).unwrap();
+        assert_eq!(share, 1.0);
+        let (other, half) = far_eye(&posed(-22.5), centers).unwrap();
+        assert!(far != other && (half - 0.5).abs() < 0.05, "{half}");
+        // The far eye is the one farther from the camera.
+        let depth = |yaw: f64, eye: usize| posed(yaw).apply(centers[eye])[2];
+        assert!(depth(40.0, far as usize) > depth(40.0, !far as usize));
     }
 
     #[test]

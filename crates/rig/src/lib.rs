@@ -25,7 +25,7 @@ pub use blendshape_frame::{
     live_link_angles, live_link_rotation, BlendshapeFrame, BlendshapeTrack, LIVE_LINK_BLENDSHAPES,
     LIVE_LINK_ROTATIONS, LIVE_LINK_VALUE_COUNT,
 };
-pub use eye_rig::{EyeObservation, EyeRig};
+pub use eye_rig::{EyeObservation, EyeRig, FAR_EYE_FROM_DEG, FAR_EYE_FULL_DEG};
 pub use eyelids::{
     aperture, Eyelids, LidPoints, LidReading, CLOSED_APERTURE, MIN_OPEN_APERTURE, OPEN_EDGE,
     OPEN_QUANTILE, WIDE_EDGE, WIDE_FULL,
