@@ -8,11 +8,7 @@
 # Needs Python 3 with pip; the pinned environment is made under target/. Not a test requirement.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-venv=target/mediapipe-venv
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import mediapipe, cv2" 2>/dev/null; then
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install -q mediapipe==0.10.21
-fi
+. scripts/dev/mediapipe_venv.sh
 cargo build -q --release -p visage-cli
 clips=("$@")
 [ ${#clips[@]} -gt 0 ] || clips=(../shared/data/video/lp_d18.mp4 ../shared/data/video/lp_d13.mp4)

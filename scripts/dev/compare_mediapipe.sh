@@ -6,11 +6,7 @@
 # Needs Python 3 with pip; the pinned environment is made under target/. Not a test requirement.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-venv=target/mediapipe-venv
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import mediapipe" 2>/dev/null; then
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install -q mediapipe==0.10.21
-fi
+. scripts/dev/mediapipe_venv.sh
 cargo build -q --release -p visage-cli
 pairs=()
 if [ "${1:-}" = --pairs ]; then pairs=(--pairs "$2"); shift 2; fi

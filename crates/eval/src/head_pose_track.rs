@@ -215,10 +215,8 @@ mod tests {
             assert!(p.shift_m[2].abs() <= motion.depth_shift_m + 1e-12);
         }
         // The axes are not locked to each other: yaw and pitch are not proportional.
-        let r = correlation(
-            &poses.iter().map(|p| p.angles[0]).collect::<Vec<_>>(),
-            &poses.iter().map(|p| p.angles[1]).collect::<Vec<_>>(),
-        );
+        let angle = |i: usize| poses.iter().map(|p| p.angles[i] as f32).collect::<Vec<_>>();
+        let r = crate::expression_scores::pearson(&angle(0), &angle(1)).unwrap();
         assert!(r.abs() < 0.5, "yaw–pitch correlation {r}");
     }
 
@@ -241,14 +239,5 @@ mod tests {
             };
             assert!(HeadPoseTrack::new(m, 1).is_err(), "{bad}");
         }
-    }
-
-    fn correlation(a: &[f64], b: &[f64]) -> f64 {
-        let n = a.len() as f64;
-        let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
-        let cov: f64 = a.iter().zip(b).map(|(x, y)| (x - ma) * (y - mb)).sum();
-        let va: f64 = a.iter().map(|x| (x - ma).powi(2)).sum();
-        let vb: f64 = b.iter().map(|y| (y - mb).powi(2)).sum();
-        cov / (va * vb).sqrt()
     }
 }

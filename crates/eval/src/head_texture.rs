@@ -17,7 +17,7 @@
 
 use image::RgbImage;
 use visage_mesh::color::srgb_to_linear_u8;
-use visage_render::Texture;
+use visage_render::{rasterize_uv_triangle, Texture};
 
 use crate::EvalError;
 
@@ -176,37 +176,9 @@ pub fn paint_lids(face: &mut RgbImage, lids: &[([[f64; 2]; 3], [f64; 3])]) {
     }
     let mut moved = vec![f64::NAN; t * t];
     for (uv, d) in lids {
-        let q = uv.map(|p| [p[0] * t as f64 - 0.5, (1.0 - p[1]) * t as f64 - 0.5]);
-        let area =
-            (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]);
-        if area.abs() < 1e-12 {
-            continue;
-        }
-        let lo = |c: usize| q.iter().map(|p| p[c]).fold(f64::INFINITY, f64::min);
-        let hi = |c: usize| q.iter().map(|p| p[c]).fold(f64::NEG_INFINITY, f64::max);
-        let (x0, x1) = (
-            lo(0).ceil().max(0.0) as usize,
-            hi(0).floor().min(t as f64 - 1.0),
-        );
-        let (y0, y1) = (
-            lo(1).ceil().max(0.0) as usize,
-            hi(1).floor().min(t as f64 - 1.0),
-        );
-        if x1 < 0.0 || y1 < 0.0 {
-            continue;
-        }
-        for y in y0..=y1 as usize {
-            for x in x0..=x1 as usize {
-                let (px, py) = (x as f64, y as f64);
-                let edge = |a: [f64; 2], b: [f64; 2]| {
-                    ((b[0] - a[0]) * (py - a[1]) - (px - a[0]) * (b[1] - a[1])) / area
-                };
-                let b = [edge(q[1], q[2]), edge(q[2], q[0]), edge(q[0], q[1])];
-                if b.iter().all(|&w| w >= -1e-9) {
-                    moved[y * t + x] = b[0] * d[0] + b[1] * d[1] + b[2] * d[2];
-                }
-            }
-        }
+        rasterize_uv_triangle(*uv, t, |x, y, b| {
+            moved[y * t + x] = b[0] * d[0] + b[1] * d[1] + b[2] * d[2];
+        });
     }
     let linear: [f32; 256] = std::array::from_fn(|c| srgb_to_linear_u8(c as u8));
     let (mut sum, mut n) = ([0.0f64; 3], 0.0);

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use visage_camera::{DepthKind, Intrinsics};
 use visage_mesh::color::{linear_to_srgb_u8, srgb_to_linear_u8};
 use visage_mesh::TriMesh;
-use visage_render::{render_depth, vertex_normals};
+use visage_render::{rasterize_uv_triangle, render_depth, vertex_normals};
 
 use crate::ExportError;
 
@@ -149,36 +149,11 @@ impl UvRaster {
     /// `u = (i + ½) / size`, `v = 1 − (j + ½) / size`.
     fn new(mesh: &TriMesh, size: usize) -> UvRaster {
         let mut texels = vec![None; size * size];
-        let s = size as f64;
         for (t, tri) in mesh.triangles.iter().enumerate() {
-            let q = tri.map(|i| {
-                let uv = mesh.uvs[i as usize];
-                [uv[0] * s - 0.5, (1.0 - uv[1]) * s - 0.5]
+            let uv = tri.map(|i| mesh.uvs[i as usize]);
+            rasterize_uv_triangle(uv, size, |x, y, b| {
+                texels[y * size + x] = Some((t as u32, b.map(|w| w as f32)));
             });
-            let area = (q[1][0] - q[0][0]) * (q[2][1] - q[0][1])
-                - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]);
-            if area.abs() < 1e-12 {
-                continue;
-            }
-            let lo = |c: usize| q.iter().map(|p| p[c]).fold(f64::INFINITY, f64::min);
-            let hi = |c: usize| q.iter().map(|p| p[c]).fold(f64::NEG_INFINITY, f64::max);
-            let (x0, x1) = (lo(0).ceil().max(0.0) as usize, hi(0).floor().min(s - 1.0));
-            let (y0, y1) = (lo(1).ceil().max(0.0) as usize, hi(1).floor().min(s - 1.0));
-            if x1 < 0.0 || y1 < 0.0 {
-                continue;
-            }
-            for y in y0..=y1 as usize {
-                for x in x0..=x1 as usize {
-                    let (px, py) = (x as f64, y as f64);
-                    let edge = |a: [f64; 2], b: [f64; 2]| {
-                        ((b[0] - a[0]) * (py - a[1]) - (px - a[0]) * (b[1] - a[1])) / area
-                    };
-                    let b = [edge(q[1], q[2]), edge(q[2], q[0]), edge(q[0], q[1])];
-                    if b.iter().all(|&w| w >= -1e-9) {
-                        texels[y * size + x] = Some((t as u32, b.map(|w| w as f32)));
-                    }
-                }
-            }
         }
         UvRaster { size, texels }
     }

@@ -91,6 +91,7 @@ mod stream;
 #[allow(unsafe_code)]
 pub mod texture;
 pub mod turntable;
+mod uv_raster;
 mod validate;
 
 pub use albedo::{Albedo, DEFAULT_ALBEDO};
@@ -107,3 +108,4 @@ pub use rasterize::{CullMode, Fragment, Rasterizer, ScreenTriangle, NO_TRIANGLE,
 pub use shading::{blinn_phong, Light, Material, UNLIT};
 pub use texture::{Texture, Wrap};
 pub use turntable::{turn_about_centre, turntable};
+pub use uv_raster::rasterize_uv_triangle;
