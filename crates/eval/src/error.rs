@@ -17,6 +17,8 @@ pub enum EvalError {
     Fusion(#[from] visage_fusion::FusionError),
     #[error("solver: {0}")]
     Fem(#[from] visage_fem::FemError),
+    #[error("face networks: {0}")]
+    Face(#[from] visage_face::FaceError),
     /// A configuration value outside its documented range.
     #[error("invalid {name} = {value}: {reason}")]
     InvalidConfig {

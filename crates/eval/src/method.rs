@@ -531,7 +531,14 @@ fn model_run(
         m.weights,
         input.max_depth_m,
     )?;
-    let mut fitter = FaceFitter::new(m.model, FitOptions::default());
+    let mut fitter = FaceFitter::new(
+        m.model,
+        FitOptions {
+            // Synthetic landmarks: the projections of the model, without the network's bias.
+            view_correction: false,
+            ..FitOptions::default()
+        },
+    );
     let n = m.domain.vertex_count();
     let (mut shape, mut camera, mut pixels) = (Vec::new(), Vec::new(), Vec::new());
     let (mut solutions, mut raw) = (Vec::new(), Vec::new());

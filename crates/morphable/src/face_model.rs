@@ -16,6 +16,7 @@ use std::path::Path;
 use half::f16;
 use visage_mesh::io::{read_obj_with, ObjReadOptions};
 
+use crate::binary_reader::Reader;
 use crate::{CanonicalCorrespondence, IctModel, MorphableError, Region, SurfacePoint};
 
 const MAGIC: &[u8; 8] = b"VISAGEFM";
@@ -199,7 +200,7 @@ impl FaceModel {
 
     /// Parses the file format; the error says what is wrong.
     pub fn parse(bytes: &[u8]) -> Result<FaceModel, String> {
-        let mut r = Reader { bytes, pos: 0 };
+        let mut r = Reader::new(bytes);
         if r.take(8)? != MAGIC {
             return Err("bad magic".into());
         }
@@ -255,9 +256,7 @@ impl FaceModel {
         };
         let identity = (0..n_id).map(|_| mode()).collect::<Result<_, _>>()?;
         let expressions = (0..n_ex).map(|_| mode()).collect::<Result<_, _>>()?;
-        if r.pos != bytes.len() {
-            return Err(format!("{} bytes after the end", bytes.len() - r.pos));
-        }
+        r.finish()?;
         Ok(FaceModel {
             neutral,
             uvs,
@@ -298,32 +297,4 @@ fn vertex_uvs(ict: &IctModel) -> Result<Vec<[f64; 2]>, MorphableError> {
         }
     }
     Ok(uvs)
-}
-
-struct Reader<'a> {
-    bytes: &'a [u8],
-    pos: usize,
-}
-
-impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize) -> Result<&'a [u8], String> {
-        let end = self.pos.checked_add(n).filter(|&e| e <= self.bytes.len());
-        let end = end.ok_or_else(|| format!("truncated at byte {}", self.pos))?;
-        let s = &self.bytes[self.pos..end];
-        self.pos = end;
-        Ok(s)
-    }
-    fn u8(&mut self) -> Result<u8, String> {
-        Ok(self.take(1)?[0])
-    }
-    fn u32(&mut self) -> Result<u32, String> {
-        let b = self.take(4)?;
-        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    }
-    fn f32(&mut self) -> Result<f32, String> {
-        Ok(f32::from_bits(self.u32()?))
-    }
-    fn f32x3(&mut self) -> Result<[f32; 3], String> {
-        Ok([self.f32()?, self.f32()?, self.f32()?])
-    }
 }

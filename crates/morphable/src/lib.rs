@@ -18,6 +18,7 @@
 
 #![forbid(unsafe_code)]
 
+mod binary_reader;
 mod error;
 mod face_model;
 pub mod fit;

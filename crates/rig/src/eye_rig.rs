@@ -4,8 +4,9 @@
 //! rotations.
 //!
 //! As the head turns away, the eye on the far side is seen ever more obliquely, partly behind
-//! the nose, and its contour's lids drift: from [`FAR_EYE_FROM_DEG`] of turn it takes the near
-//! eye's lids, wholly from [`FAR_EYE_FULL_DEG`] (a wink of the far eye is then lost).
+//! the nose, and its contour's lids and its iris drift: from [`FAR_EYE_FROM_DEG`] of turn it
+//! takes the near eye's lids and gaze, wholly from [`FAR_EYE_FULL_DEG`] (a wink of the far eye,
+//! and the eyes' vergence, are then lost).
 //!
 //! Blinks are bilateral and the eyes turn together, so the gate holds both eyes' gazes while
 //! either eye's lid covers its iris: a closing lid pushes the iris the network finds down
@@ -61,7 +62,7 @@ impl EyeRig {
         for (left, eye) in [false, true].into_iter().zip(&eyes) {
             readings[left as usize] = eye
                 .lids
-                .and_then(|lids| aperture(k, pose, centers[left as usize], &lids))
+                .and_then(|lids| aperture(k, pose, eye.corners, &lids))
                 .map(|a| self.eyelids.read(left, a));
         }
         // The eye turned away from the camera takes the other's lids as the turn grows.
@@ -87,16 +88,32 @@ impl EyeRig {
             };
         }
         let blink = blinks[0].max(blinks[1]);
+        let open = [false, true].map(|left| self.gate.is_open(left, blink));
+        let mut gazes = [None; 2];
         for (left, eye) in [false, true].into_iter().zip(&eyes) {
-            let gaze = if self.gate.is_open(left, blink) {
-                let gaze = eye_gaze(k, pose, eye.corners, eye.iris_px).map(|g| match &mut rest {
-                    Some(rest) => rest.calibrate_gaze(left, g),
-                    None => g,
-                });
-                if let Some(g) = gaze {
+            if open[left as usize] {
+                gazes[left as usize] =
+                    eye_gaze(k, pose, eye.corners, eye.iris_px).map(|g| match &mut rest {
+                        Some(rest) => rest.calibrate_gaze(left, g),
+                        None => g,
+                    });
+            }
+        }
+        // The eyes turn together: the eye turned away follows the near one's gaze as the
+        // turn grows, as it takes its lids.
+        if let (Some((far, share)), [Some(right), Some(left)]) = (far, gazes) {
+            let (f, n) = if far { (left, right) } else { (right, left) };
+            gazes[far as usize] = Some(EyeGaze {
+                yaw: (1.0 - share) * f.yaw + share * n.yaw,
+                pitch: (1.0 - share) * f.pitch + share * n.pitch,
+            });
+        }
+        for (left, eye_open) in [false, true].into_iter().zip(open) {
+            let gaze = if eye_open {
+                if let Some(g) = gazes[left as usize] {
                     self.gate.keep(left, g);
                 }
-                gaze
+                gazes[left as usize]
             } else {
                 // The lid covers the iris: the last gaze of the open eye.
                 self.gate.held(left)

@@ -1,21 +1,26 @@
 //! Gaze from the irises: each eye is a sphere fixed in the head, and the iris centre seen in
 //! the image fixes where on that sphere the eye points.
 //!
-//! The eyeball's centre sits [`EYEBALL_DEPTH_M`] behind the midpoint of the eye's corners, along
-//! the head's backward axis, with radius [`EYEBALL_RADIUS_M`] (an adult eye: 24 mm across; the
-//! corneal apex lies about 12 mm in front of its centre — Bekerman et al. 2014, "Variations in
-//! eyeball diameters of the healthy adults"). The iris centre's pixel ray meets that sphere; the
-//! direction from the centre to that point, in head coordinates, is the gaze. Its yaw and pitch
+//! The eye turns about a centre [`EYEBALL_DEPTH_M`] behind the midpoint of the eye's corners,
+//! along the head's backward axis, and the iris centre — the middle of the limbus, which the
+//! iris network outlines — lies [`IRIS_ROTATION_RADIUS_M`] from it. An adult eye turns about a
+//! point 13.5 mm behind its corneal apex, and the limbus lies about 2.5 mm behind the apex; the
+//! apex stands about 7.5 mm in front of the corners' midpoint (ICT-FaceKit's eyes, placed on
+//! scans of real heads). So the iris of an eye looking ahead sits 5 mm in front of the corners,
+//! where the model must put it: a model iris at another depth reads a turn of the head as a
+//! glance the other way (2 mm off ≈ 6° at 35° of yaw). The iris centre's pixel ray meets the
+//! sphere of that radius; the direction from the centre to that point, in head coordinates, is
+//! the gaze. Its yaw and pitch
 //! drive the eye rotations of Live Link Face's CSV and ARKit's `eyeLook*` shapes, which reach 1
 //! at [`EYE_LOOK_FULL_RAD`].
 
 use visage_camera::{Intrinsics, RigidTransform};
 
-/// Eyeball radius (metres).
-pub const EYEBALL_RADIUS_M: f64 = 0.012;
+/// Distance of the iris centre from the eye's centre of rotation (metres).
+pub const IRIS_ROTATION_RADIUS_M: f64 = 0.011;
 
-/// Depth of the eyeball's centre behind the eye corners' midpoint (metres).
-pub const EYEBALL_DEPTH_M: f64 = 0.012;
+/// Depth of the eye's centre of rotation behind the eye corners' midpoint (metres).
+pub const EYEBALL_DEPTH_M: f64 = 0.006;
 
 /// The eye rotation at which an `eyeLook*` shape reaches 1 (radians, about 25°).
 pub const EYE_LOOK_FULL_RAD: f64 = 0.436;
@@ -44,7 +49,7 @@ pub fn eye_gaze(
     let ray = k.ray(iris_px[0], iris_px[1]);
     let dc: f64 = (0..3).map(|i| ray[i] * centre[i]).sum();
     let cc: f64 = (0..3).map(|i| centre[i] * centre[i]).sum();
-    let disc = dc * dc - (cc - EYEBALL_RADIUS_M * EYEBALL_RADIUS_M);
+    let disc = dc * dc - (cc - IRIS_ROTATION_RADIUS_M * IRIS_ROTATION_RADIUS_M);
     // A ray that misses (the iris off the modelled eyeball) takes the sphere's nearest point.
     let s = if disc >= 0.0 { dc - disc.sqrt() } else { dc };
     let hit: [f64; 3] = std::array::from_fn(|i| s * ray[i] - centre[i]);
@@ -112,7 +117,7 @@ mod tests {
         let mid: [f64; 3] = std::array::from_fn(|c| 0.5 * (corners[0][c] + corners[1][c]));
         let centre = [mid[0], mid[1], mid[2] - EYEBALL_DEPTH_M];
         let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
-        let p: [f64; 3] = std::array::from_fn(|c| centre[c] + EYEBALL_RADIUS_M * dir[c] / n);
+        let p: [f64; 3] = std::array::from_fn(|c| centre[c] + IRIS_ROTATION_RADIUS_M * dir[c] / n);
         k.project(pose.apply(p))
     }
 

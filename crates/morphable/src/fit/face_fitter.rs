@@ -36,6 +36,7 @@ use super::contour::Contour;
 use super::landmark_basis::{dot, LandmarkBasis};
 use super::perspective::project_with_jacobian;
 use super::rigid_pose::{refine_pose, translation_for_rotation};
+use super::view_correction::ViewCorrection;
 use crate::FaceModel;
 
 /// FaceMesh's face-outline landmarks (MediaPipe's `FACEMESH_FACE_OVAL`).
@@ -43,6 +44,10 @@ pub const FACE_OVAL: [usize; 36] = [
     10, 338, 297, 332, 284, 251, 389, 356, 454, 323, 361, 288, 397, 365, 379, 378, 400, 377, 152,
     148, 176, 149, 150, 136, 172, 58, 132, 93, 234, 127, 162, 21, 54, 103, 67, 109,
 ];
+
+/// Gauss–Newton steps of the rigid fit on the uncorrected landmarks whose view the
+/// [`ViewCorrection`] is read at (from the previous frame's pose: converged).
+pub const VIEW_POSE_ITERATIONS: usize = 3;
 
 /// The prior weight of an expression held at 0 (out of the landmark fit).
 const HELD: f64 = 1e9;
@@ -74,6 +79,10 @@ pub struct FitOptions {
     /// Expressions left out of the landmark fit (held at 0): the eye-look shapes, which the
     /// landmarks see only through the lids — gaze comes from the irises instead.
     pub gaze_from_landmarks: bool,
+    /// Take the landmark network's bias that follows the view off the landmarks before the
+    /// fit ([`ViewCorrection::embedded`], read at the view of a rigid fit of the uncorrected
+    /// landmarks).
+    pub view_correction: bool,
     /// Pose / shape alternations per frame.
     pub iterations: usize,
     /// Gauss–Newton steps of the pose per alternation.
@@ -89,6 +98,7 @@ impl Default for FitOptions {
             outline_weight: 1.0,
             rigid_motion_m: 0.004,
             gaze_from_landmarks: false,
+            view_correction: true,
             iterations: 2,
             pose_iterations: 2,
         }
@@ -118,6 +128,9 @@ pub struct FaceFitter {
     /// Per expression: the prior's weight `1 / σ²` (a shape held at 0 gets [`HELD`]).
     expression_alpha: Vec<f64>,
     rigid_weight: Vec<f64>,
+    view_correction: Option<ViewCorrection>,
+    /// The landmarks with the view's bias taken off, scratch.
+    corrected: Vec<[f64; 2]>,
     pose: Option<RigidTransform>,
     identity: Vec<f64>,
     expression: Vec<f64>,
@@ -194,6 +207,8 @@ impl FaceFitter {
             shape_weight,
             expression_alpha,
             rigid_weight,
+            view_correction: options.view_correction.then(ViewCorrection::embedded),
+            corrected: Vec::with_capacity(n),
             pose: None,
             identity: vec![0.0; n_id],
             expression: vec![0.0; n_ex],
@@ -303,6 +318,22 @@ impl FaceFitter {
                 }
             }
         };
+        let mut corrected = std::mem::take(&mut self.corrected);
+        let landmarks_px = match &self.view_correction {
+            Some(table) => {
+                refine_pose(
+                    k,
+                    &mut pose,
+                    &self.points,
+                    landmarks_px,
+                    &self.rigid_weight,
+                    VIEW_POSE_ITERATIONS,
+                );
+                table.correct(k, &pose, &self.points, landmarks_px, &mut corrected);
+                &corrected[..]
+            }
+            None => landmarks_px,
+        };
         for iteration in 0..self.options.iterations {
             if iteration > 0 {
                 self.basis
@@ -347,6 +378,7 @@ impl FaceFitter {
             })
             .sum::<f64>()
             / n as f64;
+        self.corrected = corrected;
         FaceFit {
             pose,
             expression: self.expression.clone(),

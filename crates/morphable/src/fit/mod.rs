@@ -8,8 +8,10 @@ mod landmark_basis;
 pub mod perspective;
 pub mod rigid_pose;
 mod shape_error;
+pub mod view_correction;
 
 pub use contour::Contour;
 pub use face_fitter::{FaceFit, FaceFitter, FitOptions, FACE_OVAL, FRONTAL};
 pub use landmark_basis::LandmarkBasis;
 pub use shape_error::rms_after_scale;
+pub use view_correction::{ViewCorrection, ViewSample};
