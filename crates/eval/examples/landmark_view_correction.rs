@@ -19,7 +19,7 @@ use std::path::PathBuf;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use visage_camera::{Intrinsics, RigidTransform};
-use visage_eval::{standard_normal, tracked_views, HeadRender, ViewGrid};
+use visage_eval::{standard_normal, tracked_views, HeadRender, TrackedView, ViewGrid};
 use visage_face::{FaceMesh, FaceTracker};
 use visage_morphable::fit::rigid_pose::refine_pose;
 use visage_morphable::fit::{FaceFitter, FitOptions, ViewCorrection, ViewSample};
@@ -83,6 +83,117 @@ fn score(k: &Intrinsics, samples: &[ViewSample], table: Option<&ViewCorrection>,
     );
 }
 
+/// The iris centre of an eye looking straight ahead as the eye network places it, relative to
+/// the midpoint of the eye's corners on the face (model frame, mm; x mirrored for the left eye
+/// so that + is towards the temple): least squares over the views' true poses. Prints it, and
+/// the depth alone fitted per band of yaw.
+fn iris_rest_point(k: &Intrinsics, views: &[TrackedView], name: &str) {
+    let eyes: [([usize; 2], f64); 2] = [([33, 133], -1.0), ([362, 263], 1.0)];
+    let observations: Vec<(RigidTransform, [f64; 3], f64, [f64; 2], f64)> = views
+        .iter()
+        .filter_map(|v| v.irises.map(|i| (v, i)))
+        .flat_map(|(v, irises)| {
+            let s = &v.sample;
+            let center = s
+                .points
+                .iter()
+                .fold([0.0; 3], |a, p| [a[0] + p[0], a[1] + p[1], a[2] + p[2]]);
+            let yaw = visage_morphable::fit::view_correction::view_of(
+                &s.pose,
+                center.map(|c| c / s.points.len() as f64),
+            )[0]
+            .to_degrees();
+            eyes.iter().zip(irises).map(move |((c, side), iris)| {
+                let mid: [f64; 3] =
+                    std::array::from_fn(|i| 0.5 * (s.points[c[0]][i] + s.points[c[1]][i]));
+                (s.pose, mid, *side, iris, yaw)
+            })
+        })
+        .collect();
+    let solve =
+        |subset: &dyn Fn(f64) -> bool, free: [bool; 3], start: [f64; 3]| -> ([f64; 3], f64) {
+            let mut o = start;
+            let mut rms = 0.0;
+            for _ in 0..6 {
+                let (mut n, mut g, mut sum, mut count) = ([[0.0; 3]; 3], [0.0; 3], 0.0, 0.0f64);
+                for (pose, mid, side, iris, yaw) in &observations {
+                    if !subset(*yaw) {
+                        continue;
+                    }
+                    let x = [mid[0] + side * o[0], mid[1] + o[1], mid[2] + o[2]];
+                    let y = pose.apply(x);
+                    let u = k.project(y);
+                    let r = [iris[0] - u[0], iris[1] - u[1]];
+                    sum += r[0] * r[0] + r[1] * r[1];
+                    count += 1.0;
+                    let iz = 1.0 / y[2];
+                    let jp = [
+                        [k.fx * iz, 0.0, -k.fx * y[0] * iz * iz],
+                        [0.0, k.fy * iz, -k.fy * y[1] * iz * iz],
+                    ];
+                    let j: [[f64; 3]; 2] = std::array::from_fn(|a| {
+                        std::array::from_fn(|b| {
+                            let d = (0..3).map(|m| jp[a][m] * pose.rotation[m][b]).sum::<f64>();
+                            if b == 0 {
+                                d * side
+                            } else {
+                                d
+                            }
+                        })
+                    });
+                    for a in 0..3 {
+                        g[a] += j[0][a] * r[0] + j[1][a] * r[1];
+                        for b in 0..3 {
+                            n[a][b] += j[0][a] * j[0][b] + j[1][a] * j[1][b];
+                        }
+                    }
+                }
+                rms = (sum / count.max(1.0)).sqrt();
+                for a in 0..3 {
+                    if !free[a] {
+                        for b in 0..3 {
+                            n[a][b] = if a == b { 1.0 } else { 0.0 };
+                            n[b][a] = if a == b { 1.0 } else { 0.0 };
+                        }
+                        g[a] = 0.0;
+                    }
+                }
+                // 3 × 3 solve by Cramer's rule.
+                let det = |m: &[[f64; 3]; 3]| {
+                    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+                        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+                        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+                };
+                let d = det(&n);
+                for c in 0..3 {
+                    let mut m = n;
+                    for r in 0..3 {
+                        m[r][c] = g[r];
+                    }
+                    o[c] += det(&m) / d;
+                }
+            }
+            (o, rms)
+        };
+    let (o, rms) = solve(&|_| true, [true; 3], [0.0; 3]);
+    println!(
+        "{name}: the iris of an eye looking ahead at ({:.2}, {:.2}, {:.2}) mm from the corners' midpoint (towards the temple, up, forward); {:.2} px RMS left",
+        o[0] * 1e3, o[1] * 1e3, o[2] * 1e3, rms
+    );
+    for band in [0.0, 10.0, 20.0, 30.0, 40.0] {
+        let (b, rms) = solve(
+            &|yaw: f64| yaw.abs() >= band && yaw.abs() < band + 10.0,
+            [false, false, true],
+            o,
+        );
+        println!(
+            "  |yaw| {band:.0}–{:.0}°: forward {:.2} mm ({rms:.2} px RMS)",
+            band + 10.0,
+            b[2] * 1e3
+        );
+    }
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args_os().skip(1).map(PathBuf::from);
     let (Some(ict), Some(models), Some(out)) = (args.next(), args.next(), args.next()) else {
@@ -100,7 +211,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let grid = ViewGrid::default();
     let modes = render.model().identity_modes.len();
     let mut views =
-        |seeds: std::ops::Range<u64>| -> Result<Vec<ViewSample>, Box<dyn std::error::Error>> {
+        |seeds: std::ops::Range<u64>| -> Result<Vec<TrackedView>, Box<dyn std::error::Error>> {
             let mut all = Vec::new();
             for seed in seeds {
                 let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -116,8 +227,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             Ok(all)
         };
-    let train = views(TRAIN_SEEDS)?;
-    let held_out = views(HELD_OUT_SEEDS)?;
+    let train_views = views(TRAIN_SEEDS)?;
+    let held_out_views = views(HELD_OUT_SEEDS)?;
+    let samples = |v: &[TrackedView]| v.iter().map(|t| t.sample.clone()).collect::<Vec<_>>();
+    let (train, held_out) = (samples(&train_views), samples(&held_out_views));
+    for (name, v) in [("learned on", &train_views), ("held out", &held_out_views)] {
+        iris_rest_point(&k, v, name);
+    }
     let table = ViewCorrection::learn(&train, &k, grid.max_view())
         .ok_or("the tracked views do not span the table's terms")?;
     for (name, samples) in [("learned on", &train), ("held out", &held_out)] {

@@ -99,12 +99,15 @@ pub struct TakeResult {
     pub curves: Curves,
 }
 
-/// Played and read weights, frame by frame, of the frames with a face.
+/// Played and read weights and head angles, frame by frame, of the frames with a face.
 #[derive(Clone, Debug, Default)]
 pub struct Curves {
     pub time_s: Vec<f64>,
     pub played: Vec<[f32; ARKIT_BLENDSHAPE_COUNT]>,
     pub read: Vec<[f32; ARKIT_BLENDSHAPE_COUNT]>,
+    /// Live Link Face's head yaw, pitch and roll (radians), played and read.
+    pub played_head: Vec<[f64; 3]>,
+    pub read_head: Vec<[f64; 3]>,
 }
 
 /// Every take's results and the summary over all of them.
@@ -151,6 +154,8 @@ pub fn evaluate_expressions(
         all.time_s.extend(&t.curves.time_s);
         all.played.extend(&t.curves.played);
         all.read.extend(&t.curves.read);
+        all.played_head.extend(&t.curves.played_head);
+        all.read_head.extend(&t.curves.read_head);
     }
     let frames: usize = results.iter().map(|t| t.summary.frames).sum();
     let weighted = |f: fn(&ExpressionSummary) -> Option<f64>| {
@@ -267,6 +272,8 @@ fn evaluate_take(
             curves.time_s.push(played.time_s);
             curves.played.push(played.weights);
             curves.read.push(b.weights);
+            curves.played_head.push(played.pose.angles);
+            curves.read_head.push(b.head.map(f64::from));
             read_poses.push(live_link_rotation(b.head.map(f64::from)));
             played_poses.push(live_link_rotation(played.pose.angles));
             for (c, errors) in angle_errors.iter_mut().enumerate() {

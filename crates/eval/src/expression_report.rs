@@ -7,7 +7,7 @@ use std::path::Path;
 use visage_plot::{xy_chart_svg, XySeries};
 use visage_rig::ARKIT_BLENDSHAPES;
 
-use crate::expression_benchmark::{ExpressionResults, ExpressionSummary};
+use crate::expression_benchmark::{Curves, ExpressionResults, ExpressionSummary};
 use crate::EvalError;
 
 /// The shapes the table lists one by one.
@@ -23,7 +23,9 @@ pub const TABLE_SHAPES: [&str; 9] = [
     "eyeLookOutLeft",
 ];
 
-/// Writes `out/results.json` and `out/plots/TAKE/SHAPE.svg` (played and read against time).
+/// Writes `out/results.json`, `out/plots/TAKE/SHAPE.svg` (played and read against time) and
+/// `out/curves/TAKE.csv` (per frame with a face: time, the head's played and read yaw, pitch
+/// and roll in degrees, then each shape's played and read weight).
 ///
 /// # Errors
 /// A folder or file that cannot be written.
@@ -40,6 +42,15 @@ pub fn write_expression_results(out: &Path, results: &ExpressionResults) -> Resu
             source,
         })?;
         let c = &take.curves;
+        let curves_dir = out.join("curves");
+        std::fs::create_dir_all(&curves_dir).map_err(|source| EvalError::CreateDir {
+            path: curves_dir.clone(),
+            source,
+        })?;
+        write(
+            &curves_dir.join(format!("{}.csv", take.take)),
+            &curves_csv(c),
+        )?;
         for (w, name) in ARKIT_BLENDSHAPES.iter().enumerate() {
             let series = |label: &str, values: &[[f32; 52]]| XySeries {
                 name: label.to_string(),
@@ -68,6 +79,30 @@ pub fn write_expression_results(out: &Path, results: &ExpressionResults) -> Resu
         }
     }
     Ok(())
+}
+
+/// One row per frame: `time_s`, `played_yaw … read_roll` (degrees), `played_SHAPE, read_SHAPE`
+/// for each of the 52 shapes.
+fn curves_csv(c: &Curves) -> String {
+    let mut out =
+        String::from("time_s,played_yaw,played_pitch,played_roll,read_yaw,read_pitch,read_roll");
+    for name in ARKIT_BLENDSHAPES {
+        let _ = write!(out, ",played_{name},read_{name}");
+    }
+    out.push('\n');
+    for i in 0..c.time_s.len() {
+        let _ = write!(out, "{:.4}", c.time_s[i]);
+        for head in [&c.played_head, &c.read_head] {
+            for a in head.get(i).copied().unwrap_or([f64::NAN; 3]) {
+                let _ = write!(out, ",{:.3}", a.to_degrees());
+            }
+        }
+        for w in 0..ARKIT_BLENDSHAPES.len() {
+            let _ = write!(out, ",{:.4},{:.4}", c.played[i][w], c.read[i][w]);
+        }
+        out.push('\n');
+    }
+    out
 }
 
 fn write(path: &Path, text: &str) -> Result<(), EvalError> {

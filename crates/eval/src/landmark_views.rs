@@ -71,6 +71,14 @@ impl ViewGrid {
     }
 }
 
+/// One tracked view: what the landmark table learns from, and the irises' centres the eye
+/// network found (frame pixels, the subject's `[right, left]`; the eyes look straight ahead).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrackedView {
+    pub sample: ViewSample,
+    pub irises: Option<[[f64; 2]; 2]>,
+}
+
 /// Renders the neutral head with `identity` at each of `grid`'s poses and tracks it; the
 /// rigid fit of the uncorrected landmarks uses `rigid_weights` (one per landmark, the fit's).
 /// A render without a face is left out.
@@ -84,7 +92,7 @@ pub fn tracked_views(
     identity: &[f64],
     grid: &ViewGrid,
     rigid_weights: &[f64],
-) -> Result<Vec<ViewSample>, EvalError> {
+) -> Result<Vec<TrackedView>, EvalError> {
     let ict = render.model();
     let neutral = vec![0.0; ict.expression_modes.len()];
     let mut shape = Vec::new();
@@ -134,11 +142,18 @@ pub fn tracked_views(
             rigid_weights,
             ESTIMATE_ITERATIONS,
         );
-        samples.push(ViewSample {
-            landmarks_px,
-            points: points.clone(),
-            pose: truth,
-            estimated_pose,
+        let iris = |e: &visage_face::EyeLandmarks| {
+            let c = e.iris_center();
+            [c[0] as f64, c[1] as f64]
+        };
+        samples.push(TrackedView {
+            sample: ViewSample {
+                landmarks_px,
+                points: points.clone(),
+                pose: truth,
+                estimated_pose,
+            },
+            irises: face.eyes.as_ref().map(|e| [iris(&e.right), iris(&e.left)]),
         });
     }
     Ok(samples)

@@ -78,7 +78,7 @@ pub use first_frames::write_first_frames;
 pub use head_pose_track::{HeadMotion, HeadPose, HeadPoseTrack};
 pub use head_render::{HeadRender, RenderWork, BACKGROUND, IRIS_RADIUS_M, PUPIL_RADIUS_M};
 pub use head_texture::{head_texture, EyeLayout, Part, ATLAS_COLUMNS, ATLAS_ROWS};
-pub use landmark_views::{tracked_views, ViewGrid};
+pub use landmark_views::{tracked_views, TrackedView, ViewGrid};
 pub use method::{
     AnchoredInput, Method, MethodInput, MethodRun, ModelInput, VertexKind,
     BENCHMARK_FAIRING_LENGTH_M,

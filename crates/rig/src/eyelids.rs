@@ -7,10 +7,11 @@
 //! close to 0.2–0.45 of the open aperture at the same frames (MediaPipe's attention mesh:
 //! 0.2–0.35). So the blink comes from the contour:
 //!
-//! - **Aperture**: the upper to lower lid centre distance, measured along the face's own
-//!   vertical axis at the eye (the fitted head pose's axes projected through the camera), over
-//!   the eye's width on the fitted face, so turning or tilting the head does not open or close
-//!   the eye ([`aperture`]).
+//! - **Aperture**: the upper to lower lid centre distance over the corners' distance, both
+//!   measured along the face's own vertical and horizontal axes at the eye (the fitted head
+//!   pose's axes projected through the camera; the corners' distance corrected for their
+//!   depths on the fitted face), so turning or tilting the head does not open or close the eye
+//!   ([`aperture`]).
 //! - **Calibration per person**: the eye's open aperture is the [`OPEN_QUANTILE`] of its
 //!   apertures so far (a face's eyes are open most of the time, and a high quantile still holds
 //!   when they are closed for long stretches), but never below [`MIN_OPEN_APERTURE`] (a clip
@@ -65,13 +66,14 @@ pub struct LidReading {
     pub wide: f64,
 }
 
-/// The aperture of an eye: the upper to lower lid centre distance, measured along the face's
-/// vertical axis at the eye, over the eye's width — the distance between its corners on the
-/// fitted face, `corners` (model frame, metres; x to the face's left-to-right, y up). `pose` is
-/// the head's (model frame → camera). The width comes from the face rather than from the
-/// image: the outer corner lies a centimetre behind the inner one, so the corners' distance in
-/// the image does not shrink as the face's axes do when the head turns. `None` when the eye is
-/// seen edge-on or the corners coincide.
+/// The aperture of an eye: the upper to lower lid centre distance over the corners' distance,
+/// both measured along the face's own vertical and horizontal axes at the eye (the fitted head
+/// pose's axes projected through the camera), so turning or tilting the head does not open or
+/// close the eye. The outer corner lies about a centimetre behind the inner one, so their
+/// distance along the face's horizontal axis does not follow the head's turn exactly: it is
+/// scaled by how the fitted face's own corners, `corners` (model frame, metres; x to the
+/// face's left-to-right, y up), measure at this pose against their true distance. `pose` is the
+/// head's (model frame → camera). `None` when the eye is seen edge-on or the corners coincide.
 pub fn aperture(
     k: &Intrinsics,
     pose: &RigidTransform,
@@ -102,10 +104,21 @@ pub fn aperture(
     if det.abs() < 1e-9 * (ax[0].hypot(ax[1]) * ay[0].hypot(ay[1])).max(f64::MIN_POSITIVE) {
         return None;
     }
-    // The lids' offset in the face's own y: a·ax + b·ay = d, b.
-    let d = [lids.upper[0] - lids.lower[0], lids.upper[1] - lids.lower[1]];
-    let height = (ax[0] * d[1] - d[0] * ax[1]) / det;
-    height.is_finite().then(|| height.max(0.0) / width)
+    // [a, b] with a·ax + b·ay = d: a pixel offset in the face's own axes.
+    let face_axes = |d: [f64; 2]| {
+        [
+            (d[0] * ay[1] - ay[0] * d[1]) / det,
+            (ax[0] * d[1] - d[0] * ax[1]) / det,
+        ]
+    };
+    let sub = |p: [f64; 2], q: [f64; 2]| [p[0] - q[0], p[1] - q[1]];
+    let height = face_axes(sub(lids.upper, lids.lower))[1];
+    let seen_width = face_axes(sub(lids.corners[1], lids.corners[0]))[0].abs();
+    let [c0, c1] = corners.map(|x| k.project(pose.apply(x)));
+    let model_width = face_axes(sub(c1, c0))[0].abs();
+    let scale = width / model_width;
+    let width = seen_width * scale;
+    (width > 0.0 && height.is_finite() && scale.is_finite()).then(|| height.max(0.0) / width)
 }
 
 /// Both eyes' open apertures so far (the subject's right eye, then the left).
@@ -152,25 +165,28 @@ mod tests {
         (k, pose)
     }
 
-    /// The corners of an eye 30 mm wide, centred at the model's origin.
-    const CORNERS: [[f64; 3]; 2] = [[-0.015, 0.0, 0.0], [0.015, 0.0, 0.0]];
+    /// The corners of an eye 30 mm wide, centred at the model's origin, the outer (+x) one a
+    /// centimetre behind the inner one.
+    const CORNERS: [[f64; 3]; 2] = [[-0.015, 0.0, 0.005], [0.015, 0.0, -0.005]];
 
     /// An eye 30 mm wide, `aperture` × 30 mm open, centred at the model's origin, as `pose`
     /// shows it.
     fn eye(k: &Intrinsics, pose: &RigidTransform, aperture: f64) -> LidPoints {
-        let p = |x: f64, y: f64| k.project(pose.apply([x, y, 0.0]));
+        let p = |x: [f64; 3]| k.project(pose.apply(x));
         LidPoints {
-            upper: p(0.0, 0.015 * aperture),
-            lower: p(0.0, -0.015 * aperture),
-            corners: [p(-0.015, 0.0), p(0.015, 0.0)],
+            upper: p([0.0, 0.015 * aperture, 0.0]),
+            lower: p([0.0, -0.015 * aperture, 0.0]),
+            corners: CORNERS.map(p),
         }
     }
 
     #[test]
     fn the_aperture_does_not_change_as_the_head_turns() {
         let (k, frontal) = frontal();
+        // The lids 9 mm apart over the corners' distance in space.
+        let expected = 0.009 / 0.03f64.hypot(0.01);
         let a = aperture(&k, &frontal, CORNERS, &eye(&k, &frontal, 0.3)).unwrap();
-        assert!((a - 0.3).abs() < 1e-9, "{a}");
+        assert!((a - expected).abs() < 1e-9, "{a}");
         for (yaw, pitch) in [(0.6f64, 0.0f64), (0.0, 0.4), (-0.5, -0.3)] {
             let (cy, sy, cp, sp) = (yaw.cos(), yaw.sin(), pitch.cos(), pitch.sin());
             let turn = [[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]];
@@ -187,7 +203,7 @@ mod tests {
             let lids = eye(&k, &pose, 0.3);
             let a = aperture(&k, &pose, CORNERS, &lids).unwrap();
             // Perspective bends the small eye only slightly.
-            assert!((a - 0.3).abs() < 0.01, "yaw {yaw} pitch {pitch}: {a}");
+            assert!((a - expected).abs() < 0.01, "yaw {yaw} pitch {pitch}: {a}");
             // The image ratio alone does change.
             let d = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
             let image = d(lids.upper, lids.lower) / d(lids.corners[0], lids.corners[1]);
