@@ -5,7 +5,8 @@
 //! the table is learned from them (`ViewCorrection::learn`). Eight more identities (seeds
 //! 1016–1023) are held out and only scored: the head rotation a rigid fit reads, and the
 //! landmarks' distance from the face's projected points at the true pose, without and with the
-//! table.
+//! table. It also prints where the eye network puts the iris of an eye looking straight ahead,
+//! relative to the eye's corners (the rest point `visage-rig`'s gaze model assumes).
 //!
 //! ```sh
 //! cargo run --release -p visage-eval --example landmark_view_correction -- \
@@ -22,6 +23,7 @@ use visage_camera::{Intrinsics, RigidTransform};
 use visage_eval::{standard_normal, tracked_views, HeadRender, TrackedView, ViewGrid};
 use visage_face::{FaceMesh, FaceTracker};
 use visage_morphable::fit::rigid_pose::refine_pose;
+use visage_morphable::fit::view_correction::view_of;
 use visage_morphable::fit::{FaceFitter, FitOptions, ViewCorrection, ViewSample};
 use visage_morphable::FaceModel;
 
@@ -83,109 +85,131 @@ fn score(k: &Intrinsics, samples: &[ViewSample], table: Option<&ViewCorrection>,
     );
 }
 
-/// The iris centre of an eye looking straight ahead as the eye network places it, relative to
-/// the midpoint of the eye's corners on the face (model frame, mm; x mirrored for the left eye
-/// so that + is towards the temple): least squares over the views' true poses. Prints it, and
-/// the depth alone fitted per band of yaw.
-fn iris_rest_point(k: &Intrinsics, views: &[TrackedView], name: &str) {
-    let eyes: [([usize; 2], f64); 2] = [([33, 133], -1.0), ([362, 263], 1.0)];
-    let observations: Vec<(RigidTransform, [f64; 3], f64, [f64; 2], f64)> = views
-        .iter()
-        .filter_map(|v| v.irises.map(|i| (v, i)))
-        .flat_map(|(v, irises)| {
-            let s = &v.sample;
-            let center = s
-                .points
-                .iter()
-                .fold([0.0; 3], |a, p| [a[0] + p[0], a[1] + p[1], a[2] + p[2]]);
-            let yaw = visage_morphable::fit::view_correction::view_of(
-                &s.pose,
-                center.map(|c| c / s.points.len() as f64),
-            )[0]
-            .to_degrees();
-            eyes.iter().zip(irises).map(move |((c, side), iris)| {
-                let mid: [f64; 3] =
-                    std::array::from_fn(|i| 0.5 * (s.points[c[0]][i] + s.points[c[1]][i]));
-                (s.pose, mid, *side, iris, yaw)
+/// One eye of one view: the true pose, the midpoint of the eye's corners on the face (model
+/// frame), which side the eye is on (−1 right, +1 left), the iris pixel and the view's yaw.
+struct IrisView {
+    pose: RigidTransform,
+    mid: [f64; 3],
+    side: f64,
+    iris: [f64; 2],
+    yaw_deg: f64,
+}
+
+impl IrisView {
+    /// The iris pixel's residual and its Jacobian with respect to the rest point's offset
+    /// `o` (towards the temple, up, forward; metres) from the corners' midpoint.
+    fn linearise(&self, k: &Intrinsics, o: [f64; 3]) -> ([f64; 2], [[f64; 3]; 2]) {
+        let x = [
+            self.mid[0] + self.side * o[0],
+            self.mid[1] + o[1],
+            self.mid[2] + o[2],
+        ];
+        let y = self.pose.apply(x);
+        let u = k.project(y);
+        let iz = 1.0 / y[2];
+        let jp = [
+            [k.fx * iz, 0.0, -k.fx * y[0] * iz * iz],
+            [0.0, k.fy * iz, -k.fy * y[1] * iz * iz],
+        ];
+        let r = &self.pose.rotation;
+        let j = std::array::from_fn(|a| {
+            std::array::from_fn(|b| {
+                let d: f64 = (0..3).map(|m| jp[a][m] * r[m][b]).sum();
+                if b == 0 {
+                    d * self.side
+                } else {
+                    d
+                }
             })
-        })
-        .collect();
-    let solve =
-        |subset: &dyn Fn(f64) -> bool, free: [bool; 3], start: [f64; 3]| -> ([f64; 3], f64) {
-            let mut o = start;
-            let mut rms = 0.0;
-            for _ in 0..6 {
-                let (mut n, mut g, mut sum, mut count) = ([[0.0; 3]; 3], [0.0; 3], 0.0, 0.0f64);
-                for (pose, mid, side, iris, yaw) in &observations {
-                    if !subset(*yaw) {
-                        continue;
-                    }
-                    let x = [mid[0] + side * o[0], mid[1] + o[1], mid[2] + o[2]];
-                    let y = pose.apply(x);
-                    let u = k.project(y);
-                    let r = [iris[0] - u[0], iris[1] - u[1]];
-                    sum += r[0] * r[0] + r[1] * r[1];
-                    count += 1.0;
-                    let iz = 1.0 / y[2];
-                    let jp = [
-                        [k.fx * iz, 0.0, -k.fx * y[0] * iz * iz],
-                        [0.0, k.fy * iz, -k.fy * y[1] * iz * iz],
-                    ];
-                    let j: [[f64; 3]; 2] = std::array::from_fn(|a| {
-                        std::array::from_fn(|b| {
-                            let d = (0..3).map(|m| jp[a][m] * pose.rotation[m][b]).sum::<f64>();
-                            if b == 0 {
-                                d * side
-                            } else {
-                                d
-                            }
-                        })
-                    });
-                    for a in 0..3 {
-                        g[a] += j[0][a] * r[0] + j[1][a] * r[1];
-                        for b in 0..3 {
-                            n[a][b] += j[0][a] * j[0][b] + j[1][a] * j[1][b];
-                        }
-                    }
-                }
-                rms = (sum / count.max(1.0)).sqrt();
-                for a in 0..3 {
-                    if !free[a] {
-                        for b in 0..3 {
-                            n[a][b] = if a == b { 1.0 } else { 0.0 };
-                            n[b][a] = if a == b { 1.0 } else { 0.0 };
-                        }
-                        g[a] = 0.0;
-                    }
-                }
-                // 3 × 3 solve by Cramer's rule.
-                let det = |m: &[[f64; 3]; 3]| {
-                    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-                        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-                        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-                };
-                let d = det(&n);
-                for c in 0..3 {
-                    let mut m = n;
-                    for r in 0..3 {
-                        m[r][c] = g[r];
-                    }
-                    o[c] += det(&m) / d;
+        });
+        ([self.iris[0] - u[0], self.iris[1] - u[1]], j)
+    }
+}
+
+/// Gauss–Newton on the offset's `free` components over `views`; the offset and the RMS
+/// residual (px) at it.
+fn fit_rest_point(
+    k: &Intrinsics,
+    views: &[&IrisView],
+    free: [bool; 3],
+    start: [f64; 3],
+) -> ([f64; 3], f64) {
+    let mut o = start;
+    for _ in 0..6 {
+        let mut n = faer::Mat::<f64>::identity(3, 3);
+        let mut g = faer::Mat::<f64>::zeros(3, 1);
+        for a in (0..3).filter(|&a| free[a]) {
+            n[(a, a)] = 0.0;
+        }
+        for v in views {
+            let (r, j) = v.linearise(k, o);
+            for a in (0..3).filter(|&a| free[a]) {
+                g[(a, 0)] += j[0][a] * r[0] + j[1][a] * r[1];
+                for b in (0..3).filter(|&b| free[b]) {
+                    n[(a, b)] += j[0][a] * j[0][b] + j[1][a] * j[1][b];
                 }
             }
-            (o, rms)
+        }
+        let Ok(llt) = n.llt(faer::Side::Lower) else {
+            break;
         };
-    let (o, rms) = solve(&|_| true, [true; 3], [0.0; 3]);
+        let step = faer::linalg::solvers::Solve::solve(&llt, &g);
+        for (a, o) in o.iter_mut().enumerate() {
+            *o += step[(a, 0)];
+        }
+    }
+    let sum: f64 = views
+        .iter()
+        .map(|v| {
+            let (r, _) = v.linearise(k, o);
+            r[0] * r[0] + r[1] * r[1]
+        })
+        .sum();
+    (o, (sum / views.len().max(1) as f64).sqrt())
+}
+
+/// Where the eye network puts the iris centre of an eye looking straight ahead, relative to
+/// the midpoint of the eye's corners on the face (model frame): least squares over the views'
+/// true poses, then the depth alone per band of yaw. What `visage-rig`'s gaze model assumes
+/// (5 mm in front of the corners) is checked against it.
+fn iris_rest_point(k: &Intrinsics, views: &[TrackedView], name: &str) {
+    let eyes: [([usize; 2], f64); 2] = [([33, 133], -1.0), ([362, 263], 1.0)];
+    let mut observations = Vec::new();
+    for v in views {
+        let (Some(irises), s) = (v.irises, &v.sample) else {
+            continue;
+        };
+        let n = s.points.len() as f64;
+        let center = s.points.iter().fold([0.0; 3], |a, p| {
+            [a[0] + p[0] / n, a[1] + p[1] / n, a[2] + p[2] / n]
+        });
+        let yaw_deg = view_of(&s.pose, center)[0].to_degrees();
+        for ((corners, side), iris) in eyes.iter().zip(irises) {
+            observations.push(IrisView {
+                pose: s.pose,
+                mid: std::array::from_fn(|i| {
+                    0.5 * (s.points[corners[0]][i] + s.points[corners[1]][i])
+                }),
+                side: *side,
+                iris,
+                yaw_deg,
+            });
+        }
+    }
+    let all: Vec<&IrisView> = observations.iter().collect();
+    let (o, rms) = fit_rest_point(k, &all, [true; 3], [0.0; 3]);
     println!(
-        "{name}: the iris of an eye looking ahead at ({:.2}, {:.2}, {:.2}) mm from the corners' midpoint (towards the temple, up, forward); {:.2} px RMS left",
-        o[0] * 1e3, o[1] * 1e3, o[2] * 1e3, rms
+        "{name}: the iris of an eye looking ahead at ({:.2}, {:.2}, {:.2}) mm from the corners' midpoint (towards the temple, up, forward); {rms:.2} px RMS left",
+        o[0] * 1e3,
+        o[1] * 1e3,
+        o[2] * 1e3
     );
     for band in [0.0, 10.0, 20.0, 30.0, 40.0] {
-        let (b, rms) = solve(
-            &|yaw: f64| yaw.abs() >= band && yaw.abs() < band + 10.0,
-            [false, false, true],
-            o,
-        );
+        let some: Vec<&IrisView> = observations
+            .iter()
+            .filter(|v| v.yaw_deg.abs() >= band && v.yaw_deg.abs() < band + 10.0)
+            .collect();
+        let (b, rms) = fit_rest_point(k, &some, [false, false, true], o);
         println!(
             "  |yaw| {band:.0}–{:.0}°: forward {:.2} mm ({rms:.2} px RMS)",
             band + 10.0,
