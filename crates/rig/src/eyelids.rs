@@ -117,9 +117,22 @@ pub fn aperture(
     let [c0, c1] = corners.map(|x| k.project(pose.apply(x)));
     let model_width = face_axes(sub(c1, c0))[0].abs();
     let scale = width / model_width;
-    let width = seen_width * scale;
+    // The eye's turn from the camera: the direction to the camera, −c, in the model frame.
+    let v: [f64; 3] = std::array::from_fn(|i| -(0..3).map(|j| r[j][i] * c[j]).sum::<f64>());
+    let turn = v[0].atan2(v[2]).to_degrees().abs();
+    let share = ((turn - SEEN_WIDTH_UNTIL_DEG) / (FACE_WIDTH_FROM_DEG - SEEN_WIDTH_UNTIL_DEG))
+        .clamp(0.0, 1.0);
+    let width = (1.0 - share) * seen_width * scale + share * width;
     (width > 0.0 && height.is_finite() && scale.is_finite()).then(|| height.max(0.0) / width)
 }
+
+/// The eye's width is the one its contour's corners show, corrected for their depths, while
+/// the eye is turned from the camera by less than [`SEEN_WIDTH_UNTIL_DEG`]: the lids and the
+/// corners then come from the same crop, and the crop's frame-to-frame jitter in scale cancels
+/// in the ratio. From [`FACE_WIDTH_FROM_DEG`] it is the fitted face's: the contour's far corner
+/// hides behind the eyeball's bulge and its corners drift.
+pub const SEEN_WIDTH_UNTIL_DEG: f64 = 15.0;
+pub const FACE_WIDTH_FROM_DEG: f64 = 30.0;
 
 /// Both eyes' open apertures so far (the subject's right eye, then the left).
 #[derive(Clone, Debug)]
