@@ -268,6 +268,43 @@ mod tests {
     }
 
     #[test]
+    fn the_eye_turned_away_follows_the_near_eye_gaze() {
+        use crate::gaze::{EYEBALL_DEPTH_M, IRIS_ROTATION_RADIUS_M};
+        let k = Intrinsics::new(640, 480, 500.0, 500.0, 320.0, 240.0).unwrap();
+        let (c, s) = (40f64.to_radians().cos(), 40f64.to_radians().sin());
+        let yaw = [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]];
+        let frontal = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
+        let pose = RigidTransform {
+            rotation: std::array::from_fn(|i| {
+                std::array::from_fn(|j| (0..3).map(|k| frontal[i][k] * yaw[k][j]).sum())
+            }),
+            translation: [0.0, 0.0, 0.5],
+        };
+        let centers = [[-0.03, 0.0, 0.0], [0.03, 0.0, 0.0]];
+        let (far, share) = far_eye(&pose, centers).unwrap();
+        assert_eq!(share, 1.0);
+        // Both eyes look ahead, but the far eye's iris is found 3 mm off towards its side.
+        let eyes = std::array::from_fn(|e| {
+            let x = centers[e][0];
+            let off = if e == far as usize { 0.003 } else { 0.0 };
+            let rest = [x + off, 0.0, IRIS_ROTATION_RADIUS_M - EYEBALL_DEPTH_M];
+            EyeObservation {
+                lids: None,
+                iris_px: k.project(pose.apply(rest)),
+                corners: [[x - 0.015, 0.0, 0.0], [x + 0.015, 0.0, 0.0]],
+            }
+        });
+        let mut f = BlendshapeFrame::new(0, 0.0);
+        EyeRig::default().apply(&k, &pose, eyes, None, &mut f);
+        for name in ["eyeLookIn", "eyeLookOut", "eyeLookUp", "eyeLookDown"] {
+            for left in [false, true] {
+                assert!(get(&f, name, left) < 0.01, "{name} {left}: {:?}", f.weights);
+            }
+        }
+        assert_eq!(f.left_eye, f.right_eye);
+    }
+
+    #[test]
     fn without_a_contour_the_fit_keeps_the_lids() {
         let mut rig = EyeRig::default();
         let (k, pose, mut eyes) = frame([0.33, 0.33], 0.0);
