@@ -536,6 +536,7 @@ fn model_run(
         FitOptions {
             // Synthetic landmarks: the projections of the model, without the network's bias.
             view_correction: false,
+            landmark_noise_view_deg: None,
             ..FitOptions::default()
         },
     );

@@ -70,6 +70,7 @@ pub fn score(
         FitOptions {
             // Synthetic landmarks: the projections of the model, without the network's bias.
             view_correction: false,
+            landmark_noise_view_deg: None,
             ..FitOptions::default()
         },
     );

@@ -75,6 +75,7 @@ pub fn align_to_fitted_model(
         FitOptions {
             // Synthetic landmarks: the projections of the model, without the network's bias.
             view_correction: false,
+            landmark_noise_view_deg: None,
             ..FitOptions::default()
         },
     );

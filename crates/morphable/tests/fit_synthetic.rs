@@ -96,6 +96,7 @@ fn recovers_identity_expressions_and_pose() {
         FitOptions {
             // Synthetic landmarks: the projections of the model, without the network's bias.
             view_correction: false,
+            landmark_noise_view_deg: None,
             ..FitOptions::default()
         },
     );
@@ -156,6 +157,7 @@ fn a_neutral_face_fits_without_expressions() {
         FitOptions {
             // Synthetic landmarks: the projections of the model, without the network's bias.
             view_correction: false,
+            landmark_noise_view_deg: None,
             ..FitOptions::default()
         },
     );

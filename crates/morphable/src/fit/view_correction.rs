@@ -263,7 +263,8 @@ fn clamp_view(view: [f64; 2], max_view: [f64; 2]) -> [f64; 2] {
     ]
 }
 
-fn centroid(points: &[[f64; 3]]) -> [f64; 3] {
+/// The mean of `points`.
+pub fn centroid(points: &[[f64; 3]]) -> [f64; 3] {
     let n = points.len().max(1) as f64;
     points
         .iter()
