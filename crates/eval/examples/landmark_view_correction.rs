@@ -23,7 +23,7 @@ use visage_camera::{Intrinsics, RigidTransform};
 use visage_eval::{standard_normal, tracked_views, HeadRender, TrackedView, ViewGrid};
 use visage_face::{FaceMesh, FaceTracker};
 use visage_morphable::fit::rigid_pose::refine_pose;
-use visage_morphable::fit::view_correction::view_of;
+use visage_morphable::fit::view_correction::{centroid, view_of};
 use visage_morphable::fit::{FaceFitter, FitOptions, ViewCorrection, ViewSample};
 use visage_morphable::FaceModel;
 
@@ -52,6 +52,7 @@ fn score(k: &Intrinsics, samples: &[ViewSample], table: Option<&ViewCorrection>,
             Some(t) => t.correct(
                 k,
                 &s.estimated_pose,
+                view_of(&s.estimated_pose, centroid(&s.points)),
                 &s.points,
                 &s.landmarks_px,
                 &mut corrected,
@@ -179,11 +180,7 @@ fn iris_rest_point(k: &Intrinsics, views: &[TrackedView], name: &str) {
         let (Some(irises), s) = (v.irises, &v.sample) else {
             continue;
         };
-        let n = s.points.len() as f64;
-        let center = s.points.iter().fold([0.0; 3], |a, p| {
-            [a[0] + p[0] / n, a[1] + p[1] / n, a[2] + p[2] / n]
-        });
-        let yaw_deg = view_of(&s.pose, center)[0].to_degrees();
+        let yaw_deg = view_of(&s.pose, centroid(&s.points))[0].to_degrees();
         for ((corners, side), iris) in eyes.iter().zip(irises) {
             observations.push(IrisView {
                 pose: s.pose,

@@ -97,15 +97,7 @@ pub fn tracked_views(
     let neutral = vec![0.0; ict.expression_modes.len()];
     let mut shape = Vec::new();
     ict.shape(identity, &neutral, &mut shape)?;
-    let points: Vec<[f64; 3]> = model
-        .landmarks
-        .iter()
-        .zip(&model.landmark_offsets)
-        .map(|(l, o)| {
-            let p = l.on(&shape);
-            std::array::from_fn(|c| p[c] + o[c] as f64)
-        })
-        .collect();
+    let points = model.landmark_points(&shape);
     let pivot = render.pivot(identity)?;
     let k = *render.intrinsics();
     let mut work = RenderWork::default();

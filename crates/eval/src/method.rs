@@ -531,15 +531,7 @@ fn model_run(
         m.weights,
         input.max_depth_m,
     )?;
-    let mut fitter = FaceFitter::new(
-        m.model,
-        FitOptions {
-            // Synthetic landmarks: the projections of the model, without the network's bias.
-            view_correction: false,
-            landmark_noise_view_deg: None,
-            ..FitOptions::default()
-        },
-    );
+    let mut fitter = FaceFitter::new(m.model, FitOptions::exact_landmarks());
     let n = m.domain.vertex_count();
     let (mut shape, mut camera, mut pixels) = (Vec::new(), Vec::new(), Vec::new());
     let (mut solutions, mut raw) = (Vec::new(), Vec::new());

@@ -65,15 +65,7 @@ pub fn score(
     truth: &SyntheticSequence,
     tracking: &TrackedSequence,
 ) -> ModelFitScore {
-    let mut fitter = FaceFitter::new(
-        model,
-        FitOptions {
-            // Synthetic landmarks: the projections of the model, without the network's bias.
-            view_correction: false,
-            landmark_noise_view_deg: None,
-            ..FitOptions::default()
-        },
-    );
+    let mut fitter = FaceFitter::new(model, FitOptions::exact_landmarks());
     // The fitted expression j is the truth's expression `truth_index[j]`.
     let truth_index: Vec<Option<usize>> = model
         .expression_names

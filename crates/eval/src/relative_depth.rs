@@ -70,15 +70,7 @@ pub fn align_to_fitted_model(
     frames: &mut [DepthMap],
 ) -> Result<SequenceAlignment, EvalError> {
     let k = &truth.k;
-    let mut fitter = FaceFitter::new(
-        model,
-        FitOptions {
-            // Synthetic landmarks: the projections of the model, without the network's bias.
-            view_correction: false,
-            landmark_noise_view_deg: None,
-            ..FitOptions::default()
-        },
-    );
+    let mut fitter = FaceFitter::new(model, FitOptions::exact_landmarks());
     let mut shape = Vec::new();
     let mut mesh = TriMesh::new(Vec::new(), model.triangles.clone());
     let options = AlignmentOptions::default();

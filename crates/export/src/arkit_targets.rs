@@ -30,15 +30,7 @@ pub fn arkit_targets(capture: &Capture, base: &[[f64; 3]]) -> Option<Vec<Vec<[f6
     let mut neutral = Vec::new();
     model.shape(&identity, &[], &mut neutral);
     // The 468 landmarks on the model and on the mesh.
-    let model_landmarks: Vec<[f64; 3]> = model
-        .landmarks
-        .iter()
-        .zip(&model.landmark_offsets)
-        .map(|(p, o)| {
-            let q = p.on(&neutral);
-            std::array::from_fn(|c| q[c] + o[c] as f64)
-        })
-        .collect();
+    let model_landmarks = model.landmark_points(&neutral);
     let mesh_landmarks: Vec<[f64; 3]> = match parameters["mesh"].as_str()? {
         "face" if base.len() >= model_landmarks.len() => base[..model_landmarks.len()].to_vec(),
         "model" if base.len() == neutral.len() => {

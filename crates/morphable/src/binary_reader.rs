@@ -10,6 +10,17 @@ impl<'a> Reader<'a> {
     pub(crate) fn new(bytes: &'a [u8]) -> Self {
         Reader { bytes, pos: 0 }
     }
+    /// Reads and checks a file's magic and version.
+    pub(crate) fn header(&mut self, magic: &[u8], version: u32) -> Result<(), String> {
+        if self.take(magic.len())? != magic {
+            return Err("bad magic".into());
+        }
+        match self.u32()? {
+            v if v == version => Ok(()),
+            v => Err(format!("version {v}, expected {version}")),
+        }
+    }
+
     /// Fails when bytes are left after the end.
     pub(crate) fn finish(&self) -> Result<(), String> {
         match self.bytes.len() - self.pos {

@@ -172,6 +172,19 @@ impl FaceModel {
         b
     }
 
+    /// The 468 landmarks on a shape with the model's topology (`shape` indexed as its
+    /// vertices): each surface point plus its calibrated offset.
+    pub fn landmark_points(&self, shape: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        self.landmarks
+            .iter()
+            .zip(&self.landmark_offsets)
+            .map(|(l, o)| {
+                let p = l.on(shape);
+                std::array::from_fn(|c| p[c] + o[c] as f64)
+            })
+            .collect()
+    }
+
     /// Writes the model file.
     ///
     /// # Errors
@@ -201,13 +214,7 @@ impl FaceModel {
     /// Parses the file format; the error says what is wrong.
     pub fn parse(bytes: &[u8]) -> Result<FaceModel, String> {
         let mut r = Reader::new(bytes);
-        if r.take(8)? != MAGIC {
-            return Err("bad magic".into());
-        }
-        let version = r.u32()?;
-        if version != VERSION {
-            return Err(format!("version {version}, expected {VERSION}"));
-        }
+        r.header(MAGIC, VERSION)?;
         let mut count = || r.u32().map(|v| v as usize);
         let (n, n_tri, n_id, n_ex, n_lm) = (count()?, count()?, count()?, count()?, count()?);
         let mut expression_names = Vec::with_capacity(n_ex);

@@ -91,15 +91,7 @@ fn clip(model: &FaceModel, seed: u64, frames: usize) -> Clip {
 fn recovers_identity_expressions_and_pose() {
     let model = FaceModel::embedded();
     let clip = clip(&model, 1, 90);
-    let mut fitter = FaceFitter::new(
-        &model,
-        FitOptions {
-            // Synthetic landmarks: the projections of the model, without the network's bias.
-            view_correction: false,
-            landmark_noise_view_deg: None,
-            ..FitOptions::default()
-        },
-    );
+    let mut fitter = FaceFitter::new(&model, FitOptions::exact_landmarks());
     let (mut abs_error, mut count, mut reprojection, mut rotation_error) = (0.0, 0, 0.0, 0.0f64);
     for (f, l) in clip.landmarks.iter().enumerate() {
         let fit = fitter.fit(&clip.k, l, None);
@@ -152,15 +144,7 @@ fn a_neutral_face_fits_without_expressions() {
     );
     basis.landmarks(&p, &e, &mut points);
     let pixels: Vec<[f64; 2]> = points.iter().map(|&p| k.project(pose.apply(p))).collect();
-    let mut fitter = FaceFitter::new(
-        &model,
-        FitOptions {
-            // Synthetic landmarks: the projections of the model, without the network's bias.
-            view_correction: false,
-            landmark_noise_view_deg: None,
-            ..FitOptions::default()
-        },
-    );
+    let mut fitter = FaceFitter::new(&model, FitOptions::exact_landmarks());
     let mut fit = fitter.fit(&k, &pixels, None);
     for _ in 0..10 {
         fit = fitter.fit(&k, &pixels, None);

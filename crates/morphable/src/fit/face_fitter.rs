@@ -113,6 +113,19 @@ impl Default for FitOptions {
     }
 }
 
+impl FitOptions {
+    /// The defaults for landmarks that are the model's own projections (synthetic ones, plus
+    /// noise): without the corrections for MediaPipe's network — its bias that follows the view
+    /// and its noise that grows with it.
+    pub fn exact_landmarks() -> Self {
+        FitOptions {
+            view_correction: false,
+            landmark_noise_view_deg: None,
+            ..FitOptions::default()
+        }
+    }
+}
+
 /// One frame's fit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FaceFit {
@@ -326,25 +339,29 @@ impl FaceFitter {
                 }
             }
         };
+        if self.view_correction.is_some() {
+            // The view the table is read at: a rigid fit of the uncorrected landmarks.
+            refine_pose(
+                k,
+                &mut pose,
+                &self.points,
+                landmarks_px,
+                &self.rigid_weight,
+                VIEW_POSE_ITERATIONS,
+            );
+        }
+        let view = view_of(&pose, centroid(&self.points));
         let mut corrected = std::mem::take(&mut self.corrected);
         let landmarks_px = match &self.view_correction {
             Some(table) => {
-                refine_pose(
-                    k,
-                    &mut pose,
-                    &self.points,
-                    landmarks_px,
-                    &self.rigid_weight,
-                    VIEW_POSE_ITERATIONS,
-                );
-                table.correct(k, &pose, &self.points, landmarks_px, &mut corrected);
+                table.correct(k, &pose, view, &self.points, landmarks_px, &mut corrected);
                 &corrected[..]
             }
             None => landmarks_px,
         };
         let sigma = match self.options.landmark_noise_view_deg {
             Some(v) => {
-                let [yaw, pitch] = view_of(&pose, centroid(&self.points)).map(f64::to_degrees);
+                let [yaw, pitch] = view.map(f64::to_degrees);
                 sigma * (1.0 + (yaw / v).powi(2) + (pitch / v).powi(2))
             }
             None => sigma,

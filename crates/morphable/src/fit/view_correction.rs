@@ -173,18 +173,19 @@ impl ViewCorrection {
         self.coefficients[l].map(|c| c.iter().zip(&t).map(|(&c, t)| c as f64 * t).sum())
     }
 
-    /// The landmarks `landmarks_px` with the bias at `pose`'s view taken off: each moved by
-    /// minus its offset, mapped to pixels at its point `points[l]` placed by `pose` — the
-    /// rigid fit of the uncorrected landmarks.
+    /// The landmarks `landmarks_px` with the bias at `view` taken off: each moved by minus its
+    /// offset, mapped to pixels at its point `points[l]` placed by `pose`. `pose` is the rigid
+    /// fit of the uncorrected landmarks and `view` its [`view_of`] the points' centroid.
     pub fn correct(
         &self,
         k: &Intrinsics,
         pose: &RigidTransform,
+        view: [f64; 2],
         points: &[[f64; 3]],
         landmarks_px: &[[f64; 2]],
         out: &mut Vec<[f64; 2]>,
     ) {
-        let t = view_terms(clamp_view(view_of(pose, centroid(points)), self.max_view));
+        let t = view_terms(clamp_view(view, self.max_view));
         out.clear();
         out.extend(landmarks_px.iter().enumerate().map(|(l, &seen)| {
             let (Some(c), Some(&x)) = (self.coefficients.get(l), points.get(l)) else {
@@ -219,13 +220,7 @@ impl ViewCorrection {
     /// Parses [`ViewCorrection::to_bytes`]' format; the error says what is wrong.
     pub fn parse(bytes: &[u8]) -> Result<ViewCorrection, String> {
         let mut r = Reader::new(bytes);
-        if r.take(8)? != MAGIC {
-            return Err("bad magic".into());
-        }
-        let version = r.u32()?;
-        if version != VERSION {
-            return Err(format!("version {version}, expected {VERSION}"));
-        }
+        r.header(MAGIC, VERSION)?;
         let landmarks = r.u32()? as usize;
         let terms = r.u32()? as usize;
         if terms != VIEW_TERMS {
@@ -372,6 +367,7 @@ mod tests {
         table.correct(
             &k,
             &s.estimated_pose,
+            view(s),
             &s.points,
             &s.landmarks_px,
             &mut corrected,
