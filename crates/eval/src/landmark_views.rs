@@ -71,12 +71,14 @@ impl ViewGrid {
     }
 }
 
-/// One tracked view: what the landmark table learns from, and the irises' centres the eye
-/// network found (frame pixels, the subject's `[right, left]`; the eyes look straight ahead).
+/// One tracked view: what the landmark table learns from, and what the eye network found
+/// (frame pixels, the subject's `[right, left]`; the eyes look straight ahead): the irises'
+/// centres and the contours' two corners.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TrackedView {
     pub sample: ViewSample,
     pub irises: Option<[[f64; 2]; 2]>,
+    pub contour_corners: Option<[[[f64; 2]; 2]; 2]>,
 }
 
 /// Renders the neutral head with `identity` at each of `grid`'s poses and tracks it; the
@@ -146,6 +148,11 @@ pub fn tracked_views(
                 estimated_pose,
             },
             irises: face.eyes.as_ref().map(|e| [iris(&e.right), iris(&e.left)]),
+            contour_corners: face.eyes.as_ref().and_then(|e| {
+                let corners =
+                    |e: &visage_face::EyeLandmarks| e.lid_points().map(|[_, _, a, b]| [a, b]);
+                Some([corners(&e.right)?, corners(&e.left)?])
+            }),
         });
     }
     Ok(samples)

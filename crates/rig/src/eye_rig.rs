@@ -92,11 +92,17 @@ impl EyeRig {
         let mut gazes = [None; 2];
         for (left, eye) in [false, true].into_iter().zip(&eyes) {
             if open[left as usize] {
-                gazes[left as usize] =
-                    eye_gaze(k, pose, eye.corners, eye.iris_px).map(|g| match &mut rest {
-                        Some(rest) => rest.calibrate_gaze(left, g),
-                        None => g,
-                    });
+                gazes[left as usize] = eye_gaze(
+                    k,
+                    pose,
+                    eye.corners,
+                    eye.iris_px,
+                    eye.lids.map(|l| l.corners),
+                )
+                .map(|g| match &mut rest {
+                    Some(rest) => rest.calibrate_gaze(left, g),
+                    None => g,
+                });
             }
         }
         // The eyes turn together: the eye turned away follows the near one's gaze as the
@@ -177,6 +183,7 @@ fn get(frame: &BlendshapeFrame, shape: &str, left: bool) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::CONTOUR_CORNERS_OFFSET_M;
 
     /// A frontal head 0.5 m away, its eyes 30 mm wide, `apertures` open (right, left), the
     /// irises `drop_m` below the eyes' centres.
@@ -195,11 +202,15 @@ mod tests {
             let mid = 0.5 * (a + b);
             let p = |x: f64, y: f64| k.project(pose.apply([x, y, 0.0]));
             let h = 0.015 * apertures[e];
+            // The contour's corners where the gaze model expects them.
+            let [ox, oy, oz] = CONTOUR_CORNERS_OFFSET_M;
+            let side = mid.signum();
+            let contour = |x: f64| k.project(pose.apply([x + side * ox, oy, oz]));
             EyeObservation {
                 lids: Some(LidPoints {
                     upper: p(mid, h),
                     lower: p(mid, -h),
-                    corners: [p(a, 0.0), p(b, 0.0)],
+                    corners: [contour(a), contour(b)],
                 }),
                 iris_px: p(mid, -drop_m),
                 corners: [[a, 0.0, 0.0], [b, 0.0, 0.0]],

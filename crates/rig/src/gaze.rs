@@ -13,6 +13,16 @@
 //! the gaze. Its yaw and pitch
 //! drive the eye rotations of Live Link Face's CSV and ARKit's `eyeLook*` shapes, which reach 1
 //! at [`EYE_LOOK_FULL_RAD`].
+//!
+//! Where the eye network's contour is found, the eye is placed by it rather than by the fitted
+//! head alone: the iris and the contour come from the same crop of the same network, while the
+//! fitted pose is a few degrees off at a large turn, and a degree of head yaw moves the eye's
+//! centre against the iris by about 3° of gaze. The contour's corners' midpoint lies
+//! [`CONTOUR_CORNERS_OFFSET_M`] from the face's corners' midpoint; the eye is shifted, at its
+//! depth, until that point falls on the contour's. The contour follows the iris part of the way
+//! as the eye turns (on renders by 0.43 across and 0.67 up and down: the lids follow a vertical
+//! gaze), so a gaze read this way is smaller than the eye's turn; it is left so, because
+//! scaling it back up made it noisier than the gaze placed by the head.
 
 use visage_camera::{Intrinsics, RigidTransform};
 
@@ -21,6 +31,12 @@ pub const IRIS_ROTATION_RADIUS_M: f64 = 0.011;
 
 /// Depth of the eye's centre of rotation behind the eye corners' midpoint (metres).
 pub const EYEBALL_DEPTH_M: f64 = 0.006;
+
+/// Where the eye network's contour puts the midpoint of an eye's two corners, from the
+/// midpoint of the face's eye-corner landmarks (model frame: towards the temple, up, forward;
+/// metres). Measured on renders of eyes looking ahead, over ±45° of yaw and ±30° of pitch
+/// (`visage-eval`'s `landmark_view_correction` example).
+pub const CONTOUR_CORNERS_OFFSET_M: [f64; 3] = [-0.00155, -0.00161, 0.00287];
 
 /// The eye rotation at which an `eyeLook*` shape reaches 1 (radians, about 25°).
 pub const EYE_LOOK_FULL_RAD: f64 = 0.436;
@@ -35,16 +51,29 @@ pub struct EyeGaze {
 
 /// The gaze of an eye whose corners are at `corners` (model frame: x to the subject's left, y
 /// up, z out of the face; metres) in a head at `pose` (model frame → camera), with its iris
-/// centre at pixel `iris_px`. `None` when the iris ray misses the eyeball.
+/// centre at pixel `iris_px` and, where the eye network found them, the contour's corners at
+/// `contour_corners_px`. `None` when the iris ray misses the eyeball.
 pub fn eye_gaze(
     k: &Intrinsics,
     pose: &RigidTransform,
     corners: [[f64; 3]; 2],
     iris_px: [f64; 2],
+    contour_corners_px: Option<[[f64; 2]; 2]>,
 ) -> Option<EyeGaze> {
     let mid: [f64; 3] = std::array::from_fn(|c| 0.5 * (corners[0][c] + corners[1][c]));
     let centre_model = [mid[0], mid[1], mid[2] - EYEBALL_DEPTH_M];
-    let centre = pose.apply(centre_model);
+    let mut centre = pose.apply(centre_model);
+    if let Some([a, b]) = contour_corners_px {
+        // The contour's midpoint, at the depth the fitted head puts it; the eye moves with it.
+        let [ox, oy, oz] = CONTOUR_CORNERS_OFFSET_M;
+        let side = if mid[0] < 0.0 { -1.0 } else { 1.0 };
+        let placed = pose.apply([mid[0] + side * ox, mid[1] + oy, mid[2] + oz]);
+        let ray = k.ray(0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]));
+        let s = placed[2] / ray[2];
+        for (c, (r, p)) in centre.iter_mut().zip(ray.iter().zip(placed)) {
+            *c += s * r - p;
+        }
+    }
     // The iris ray from the camera centre: |s·d − c|² = r², nearer root.
     let ray = k.ray(iris_px[0], iris_px[1]);
     let dc: f64 = (0..3).map(|i| ray[i] * centre[i]).sum();
@@ -136,7 +165,7 @@ mod tests {
                 f64::cos(yaw) * f64::cos(pitch),
             ];
             let px = iris_pixel(&k, &pose, corners, dir);
-            let g = eye_gaze(&k, &pose, corners, px).unwrap();
+            let g = eye_gaze(&k, &pose, corners, px, None).unwrap();
             assert!(
                 (g.yaw - yaw).abs() < 1e-6 && (g.pitch - pitch).abs() < 1e-6,
                 "{g:?}"
@@ -153,6 +182,42 @@ mod tests {
         assert_eq!(look[1], 1.0);
         assert_eq!(look[2], 0.0);
         assert!((look[3] - 0.2 / EYE_LOOK_FULL_RAD).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_contour_places_the_eye_where_the_fitted_head_misplaces_it() {
+        let k = Intrinsics::from_fov(640, 480, 60.0).unwrap();
+        let truth = RigidTransform {
+            rotation: mat3_mul(&exp_so3([0.0, 0.5, 0.0]), &FRONTAL),
+            translation: [0.0, 0.0, 0.5],
+        };
+        // The subject's left eye, 8 cm in front of the head's origin, looking ahead.
+        let corners = [[0.018, 0.03, 0.08], [0.048, 0.03, 0.075]];
+        let iris = iris_pixel(&k, &truth, corners, [0.0, 0.0, 1.0]);
+        let mid: [f64; 3] = std::array::from_fn(|c| 0.5 * (corners[0][c] + corners[1][c]));
+        let [ox, oy, oz] = CONTOUR_CORNERS_OFFSET_M;
+        let contour_mid = k.project(truth.apply([mid[0] + ox, mid[1] + oy, mid[2] + oz]));
+        let contour = [
+            [contour_mid[0] - 20.0, contour_mid[1] + 1.0],
+            [contour_mid[0] + 20.0, contour_mid[1] - 1.0],
+        ];
+        // A fit that reads the head's yaw 3° past the truth, about the head's origin.
+        let fitted = RigidTransform {
+            rotation: mat3_mul(&exp_so3([0.0, 0.5 + 3f64.to_radians(), 0.0]), &FRONTAL),
+            translation: truth.translation,
+        };
+        let exact = eye_gaze(&k, &truth, corners, iris, Some(contour)).unwrap();
+        assert!(
+            exact.yaw.abs() < 1e-9 && exact.pitch.abs() < 1e-9,
+            "{exact:?}"
+        );
+        let by_head = eye_gaze(&k, &fitted, corners, iris, None).unwrap();
+        let by_contour = eye_gaze(&k, &fitted, corners, iris, Some(contour)).unwrap();
+        // Placed by the head, the eye moves 4 mm against its iris: a glance of about 20°.
+        assert!(by_head.yaw.to_degrees().abs() > 10.0, "{by_head:?}");
+        // Placed by the contour, only the head's rotation error is left.
+        assert!(by_contour.yaw.to_degrees().abs() < 3.5, "{by_contour:?}");
+        assert!(by_contour.pitch.to_degrees().abs() < 0.5, "{by_contour:?}");
     }
 
     #[test]

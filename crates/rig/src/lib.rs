@@ -30,6 +30,9 @@ pub use eyelids::{
     aperture, Eyelids, LidPoints, LidReading, CLOSED_APERTURE, MIN_OPEN_APERTURE, OPEN_EDGE,
     OPEN_QUANTILE, WIDE_EDGE, WIDE_FULL,
 };
-pub use gaze::{eye_gaze, eye_look_gaze, eye_look_weights, EyeGaze, EYE_LOOK_FULL_RAD};
+pub use gaze::{
+    eye_gaze, eye_look_gaze, eye_look_weights, EyeGaze, CONTOUR_CORNERS_OFFSET_M, EYEBALL_DEPTH_M,
+    EYE_LOOK_FULL_RAD, IRIS_ROTATION_RADIUS_M,
+};
 pub use lid_gate::{LidGate, HOLD_BLINK};
 pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP, MIN_RANGE};
