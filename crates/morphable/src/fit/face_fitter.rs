@@ -18,7 +18,8 @@
 //!   (α = 1), expression weights with a prior standard deviation [`FitOptions::expression_prior`].
 //!   The face outline's side landmarks are silhouette points: they slide to the model vertex
 //!   nearest them each frame ([`super::Contour`]) and count with
-//!   [`FitOptions::outline_weight`].
+//!   [`FitOptions::outline_weight`]. The lower face's landmarks are no evidence for the upper
+//!   face's shapes ([`super::region_evidence`]).
 //! - **Cost**: each alternation is a Gauss–Newton step with the exact perspective gradient
 //!   `AᵀW(ℓ − π)`; the normal matrix `AᵀWA` (the 7 million multiply-adds of a frame) is
 //!   formed once per frame, in single precision, at the frame's first linearisation and reused
@@ -35,6 +36,7 @@ use super::bounded_least_squares::BoxQp;
 use super::contour::Contour;
 use super::landmark_basis::{dot, LandmarkBasis};
 use super::perspective::project_with_jacobian;
+use super::region_evidence::keep_evidence_local;
 use super::rigid_pose::{refine_pose, translation_for_rotation};
 use super::view_correction::{centroid, view_of, ViewCorrection};
 use crate::FaceModel;
@@ -90,6 +92,9 @@ pub struct FitOptions {
     /// expression. On the pixel benchmark 20° took the rigid leak's p99 from 0.32 to 0.26 (30°:
     /// 0.30) and the tuning take's MAE from 0.118 to 0.110.
     pub landmark_noise_view_deg: Option<f64>,
+    /// The lower face's landmarks are no evidence for the upper face's shapes
+    /// ([`super::region_evidence`]): speech does not open a sneer or a squint.
+    pub region_evidence: bool,
     /// Pose / shape alternations per frame.
     pub iterations: usize,
     /// Gauss–Newton steps of the pose per alternation.
@@ -107,6 +112,7 @@ impl Default for FitOptions {
             gaze_from_landmarks: false,
             view_correction: true,
             landmark_noise_view_deg: Some(20.0),
+            region_evidence: true,
             iterations: 2,
             pose_iterations: 2,
         }
@@ -116,11 +122,13 @@ impl Default for FitOptions {
 impl FitOptions {
     /// The defaults for landmarks that are the model's own projections (synthetic ones, plus
     /// noise): without the corrections for MediaPipe's network — its bias that follows the view
-    /// and its noise that grows with it.
+    /// and its noise that grows with it — and with every landmark the evidence of every shape,
+    /// as the model that made them.
     pub fn exact_landmarks() -> Self {
         FitOptions {
             view_correction: false,
             landmark_noise_view_deg: None,
+            region_evidence: false,
             ..FitOptions::default()
         }
     }
@@ -192,7 +200,7 @@ pub struct FaceFitter {
 impl FaceFitter {
     /// A fitter for `model`'s landmarks.
     pub fn new(model: &FaceModel, options: FitOptions) -> FaceFitter {
-        let basis = LandmarkBasis::new(model);
+        let mut basis = LandmarkBasis::new(model);
         let contour = Contour::new(model, &basis);
         let n = basis.landmark_count();
         let (n_id, n_ex) = (basis.identity_count, basis.expression_count);
@@ -211,6 +219,10 @@ impl FaceFitter {
                 }
             })
             .collect();
+        // After the rigid landmarks: a lip an upper shape moves is not rigid.
+        if options.region_evidence {
+            keep_evidence_local(&mut basis, &model.expression_names);
+        }
         let free = 1.0 / (options.expression_prior * options.expression_prior);
         let expression_alpha = model
             .expression_names

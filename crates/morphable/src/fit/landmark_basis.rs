@@ -16,6 +16,8 @@ pub struct LandmarkBasis {
     pub modes: Vec<f64>,
     pub identity_count: usize,
     pub expression_count: usize,
+    /// Per landmark, the expressions kept out of its rows ([`LandmarkBasis::exclude`]).
+    excluded: Vec<Vec<usize>>,
 }
 
 impl LandmarkBasis {
@@ -51,6 +53,7 @@ impl LandmarkBasis {
             modes,
             identity_count: n_id,
             expression_count: n_ex,
+            excluded: vec![Vec::new(); model.landmarks.len()],
         }
     }
 
@@ -80,6 +83,24 @@ impl LandmarkBasis {
             assert_eq!(row.len(), m, "one entry per mode");
             self.mean[3 * j + c] = mean[c];
             self.modes[(3 * j + c) * m..(3 * j + c + 1) * m].copy_from_slice(row);
+        }
+        self.clear_excluded(j);
+    }
+
+    /// Keeps `expressions` (indices among the expressions) out of landmark j: its rows of them
+    /// are 0 from now on, also after [`LandmarkBasis::set_landmark`]. The landmark then neither
+    /// moves with them nor counts as their evidence.
+    pub fn exclude(&mut self, j: usize, expressions: &[usize]) {
+        self.excluded[j].extend_from_slice(expressions);
+        self.clear_excluded(j);
+    }
+
+    fn clear_excluded(&mut self, j: usize) {
+        let m = self.mode_count();
+        for c in 0..3 {
+            for &e in &self.excluded[j] {
+                self.modes[(3 * j + c) * m + self.identity_count + e] = 0.0;
+            }
         }
     }
 

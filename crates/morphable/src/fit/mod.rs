@@ -6,6 +6,7 @@ mod contour;
 mod face_fitter;
 mod landmark_basis;
 pub mod perspective;
+pub mod region_evidence;
 pub mod rigid_pose;
 mod shape_error;
 pub mod view_correction;
