@@ -343,12 +343,15 @@ fn gaze_errors(
     }
 }
 
+/// A larger shift of the iris between two renders of one pose is the tracker moving (pixels).
+const MAX_IRIS_SHIFT_PX: f64 = 8.0;
+
 /// How far the contour's corners' midpoint follows the iris when the eyes look away: for
 /// each of `identities`, at yaws of 0°, ±15° and ±30° and pitches of 0° and ±15°, the face
 /// rendered with its eyes ahead and looking up, down, left and right (the `eyeLook*` weights at
 /// 0.6: the eyes turn 15° and the lids follow, as the expression benchmark plays them). The
 /// ratio, per image axis, of the contour's midpoint's motion to the iris's, by least squares
-/// over both eyes.
+/// over both eyes (shifts of more than [`MAX_IRIS_SHIFT_PX`] left out).
 fn contour_follows_iris(
     render: &HeadRender,
     tracker: &mut FaceTracker,
@@ -420,6 +423,11 @@ fn contour_follows_iris(
                             for (s, b) in seen.iter().zip(base) {
                                 let iris = s[0][*a] - b[0][*a];
                                 let contour = s[1][*a] - b[1][*a];
+                                // A 15° turn moves the iris about 3.5 px here: more is the
+                                // tracker still settling on the pose, not the eye.
+                                if iris.abs() > MAX_IRIS_SHIFT_PX {
+                                    continue;
+                                }
                                 cross[*a] += iris * contour;
                                 square[*a] += iris * iris;
                             }
