@@ -20,7 +20,7 @@
 //! centre against the iris by about 3° of gaze. The contour's corners' midpoint lies
 //! [`CONTOUR_CORNERS_OFFSET_M`] from the face's corners' midpoint; the eye is shifted, at its
 //! depth, until that point falls on the contour's. The contour follows the iris part of the way
-//! as the eye turns (on renders by 0.43 across and 0.67 up and down: the lids follow a vertical
+//! as the eye turns (on renders by 0.44 across and 0.66 up and down: the lids follow a vertical
 //! gaze), so a gaze read this way is smaller than the eye's turn; it is left so, because
 //! scaling it back up made it noisier than the gaze placed by the head.
 
