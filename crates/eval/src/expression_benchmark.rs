@@ -36,6 +36,9 @@ pub struct ExpressionOptions {
     /// Write this many frames of each take, evenly spread, as PNG into `frames_dir`.
     pub save_frames: usize,
     pub frames_dir: Option<PathBuf>,
+    /// Score the weights as the fit reads them, with what the head's turn adds left on
+    /// (`visage_rig::PoseLeak` off; its table is learned from such runs).
+    pub keep_pose_leak: bool,
 }
 
 /// One shape's scores over a take (or all takes).
@@ -248,7 +251,9 @@ fn evaluate_take(
             .collect()
     };
     let input = replay.input(Arc::clone(render), save, options.frames_dir.clone())?;
-    let mut builder = Reconstructor::builder().intrinsics(*render.intrinsics());
+    let mut builder = Reconstructor::builder()
+        .intrinsics(*render.intrinsics())
+        .pose_leak(!options.keep_pose_leak);
     if let Some(dir) = &options.models {
         builder = builder.models_dir(dir);
     }

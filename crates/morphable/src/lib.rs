@@ -18,7 +18,7 @@
 
 #![forbid(unsafe_code)]
 
-mod binary_reader;
+pub mod binary_reader;
 mod error;
 mod face_model;
 pub mod fit;

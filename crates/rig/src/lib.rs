@@ -3,8 +3,9 @@
 //! the 52 ARKit blendshape weights ([`IctToArkit`], its name tables), the eyes'
 //! rotations ([`eye_gaze`], held through blinks by the [`LidGate`]), the lids from the eye
 //! network's contour ([`Eyelids`]: blink and wide eyes), measured from the
-//! person's resting face ([`RestPose`]), and the head's rotation, as one [`BlendshapeFrame`] per
-//! frame with Live Link Face's names and signs.
+//! person's resting face ([`RestPose`]) and less what the head's turn alone adds
+//! ([`PoseLeak`]), and the head's rotation, as one [`BlendshapeFrame`] per frame with Live Link
+//! Face's names and signs.
 
 #![forbid(unsafe_code)]
 
@@ -15,6 +16,7 @@ mod eyelids;
 mod gaze;
 mod histogram;
 mod lid_gate;
+mod pose_leak;
 mod rest_pose;
 
 pub use arkit::{
@@ -35,4 +37,5 @@ pub use gaze::{
     EYE_LOOK_FULL_RAD, IRIS_ROTATION_RADIUS_M,
 };
 pub use lid_gate::{LidGate, HOLD_BLINK};
+pub use pose_leak::{pose_leak_terms, LeakSample, PoseLeak, POSE_LEAK_TERMS};
 pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP, MIN_RANGE};

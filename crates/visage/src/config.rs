@@ -179,6 +179,7 @@ pub struct Builder {
     pub(crate) model: ModelSource,
     pub(crate) fit: FitOptions,
     pub(crate) rest_pose: bool,
+    pub(crate) pose_leak: bool,
     pub(crate) landmark_smoothing: Option<f64>,
     pub(crate) latency: usize,
     pub(crate) fairing_length_mm: Option<f64>,
@@ -202,6 +203,7 @@ impl Default for Builder {
             model: ModelSource::default(),
             fit: FitOptions::default(),
             rest_pose: true,
+            pose_leak: true,
             landmark_smoothing: Some(DEFAULT_LANDMARK_SMOOTHING),
             latency: DEFAULT_LATENCY_FRAMES,
             fairing_length_mm: None,
@@ -216,6 +218,14 @@ impl Builder {
     /// the frames so far (default), or to the model's neutral face.
     pub fn rest_pose(mut self, on: bool) -> Self {
         self.rest_pose = on;
+        self
+    }
+
+    /// Whether what the head's turn alone adds to each blendshape weight, learned on renders
+    /// of neutral heads (`visage_rig::PoseLeak`), is taken off (default), or the weights are
+    /// given as the fit reads them (to learn that table).
+    pub fn pose_leak(mut self, on: bool) -> Self {
+        self.pose_leak = on;
         self
     }
 

@@ -25,7 +25,7 @@ use visage_face::{
 };
 use visage_rig::EyeRig;
 use visage_rig::RestPose;
-use visage_rig::{BlendshapeFrame, IctToArkit};
+use visage_rig::{BlendshapeFrame, IctToArkit, PoseLeak};
 use visage_run_folder::LandmarksFrame;
 use visage_run_folder::{FrameMetrics, MeshSummary, Report, RunStatus, RunSummary, RunTiming};
 
@@ -273,6 +273,7 @@ impl Reconstructor {
             to_arkit: IctToArkit::new(&m.expression_names),
             iris,
             rest: builder.rest_pose.then(|| RestPose::new(m)),
+            pose_leak: builder.pose_leak.then(PoseLeak::embedded),
             weights: Vec::with_capacity(m.expressions.len()),
             // A depth network is aligned to the fitted model's surface.
             surface: (uses_model || builder.depth.needs_reference()).then(|| Arc::clone(m)),

@@ -27,7 +27,7 @@ use crate::Error;
 use visage_face::{face_jumped, CutDetector};
 use visage_face::{DistanceSmoother, LandmarkSmoother};
 use visage_rig::{lips_closed, RestPose};
-use visage_rig::{live_link_angles, BlendshapeFrame, IctToArkit};
+use visage_rig::{live_link_angles, BlendshapeFrame, IctToArkit, PoseLeak};
 use visage_rig::{EyeObservation, EyeRig, LidPoints};
 use visage_run_folder::{FaceRecord, LandmarksFrame};
 use visage_run_folder::{FrameMetrics, FrameQuality, FrameStatus, PoseMetrics};
@@ -96,6 +96,8 @@ pub(crate) struct ModelStage {
     pub iris: Option<[IrisLandmarker; 2]>,
     /// Weights relative to the person's resting face (None: relative to the model's neutral).
     pub rest: Option<RestPose>,
+    /// What the head's turn alone adds to the weights, taken off them.
+    pub pose_leak: Option<PoseLeak>,
     /// Scratch: the calibrated weights.
     pub weights: Vec<f64>,
     /// The model, when its fitted surface is needed downstream (the model mesh or depth).
@@ -157,6 +159,9 @@ impl ModelStage {
             ];
             self.eyes
                 .apply(&self.k, &fit.pose, observed, self.rest.as_mut(), &mut b);
+        }
+        if let Some(leak) = &self.pose_leak {
+            leak.remove(b.head, &mut b.weights);
         }
         metrics.model_fit_px = Some(fit.mean_error_px);
         if let Some(model) = &self.surface {

@@ -129,6 +129,7 @@ pub fn expressions(args: ExpressionsArgs) -> anyhow::Result<()> {
         models: args.models,
         save_frames: args.save_frames,
         frames_dir,
+        keep_pose_leak: false,
     };
     let render = HeadRender::load(&args.model, k, args.distance).with_context(|| {
         format!(
