@@ -94,6 +94,13 @@ const CASES: &[Case] = &[
         models: false,
     },
     Case {
+        what: "`--overwrite` of a folder no run wrote to",
+        args: &["run", "{dir}/face.png", "--out", "{dir}/full", "--overwrite"],
+        exit: 2,
+        says: "full: --overwrite replaces a previous visage run, and this folder does not hold one; it holds notes.txt. Nothing was removed: choose another folder, or remove these yourself",
+        models: false,
+    },
+    Case {
         what: "an output folder under a file",
         args: &["run", "{dir}/face.png", "--out", "{dir}/tri.obj/out"],
         exit: 2,

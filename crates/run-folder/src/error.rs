@@ -40,6 +40,20 @@ pub enum RunFolderError {
         dir.display()
     )]
     NotEmpty { dir: PathBuf, holds: String },
+    /// `--overwrite` of a folder that no visage run wrote to.
+    #[error(
+        "{}: --overwrite replaces a previous visage run, and this folder does not hold one; it \
+         holds {holds}. Nothing was removed: choose another folder, or remove these yourself",
+        dir.display()
+    )]
+    NotARun { dir: PathBuf, holds: String },
+    /// Another process writes into the output folder.
+    #[error(
+        "{}: the output folder is in use by another visage process ({holder}); wait for it to \
+         finish or stop it, or choose another folder",
+        dir.display()
+    )]
+    Locked { dir: PathBuf, holder: String },
     /// A mesh or point cache could not be read (the mesh reader's error, which names the file).
     #[error(transparent)]
     ReadMesh(#[from] MeshIoError),

@@ -56,6 +56,10 @@ pub const BATCH: &str = "batch.json";
 /// In a batch folder: the clips being processed, each renamed to its id when done.
 pub const BATCH_PARTIAL_FOLDER: &str = ".partial";
 
+/// The lock file: held by the one process writing into the folder, naming it; it stays in
+/// the folder, marking it as one visage wrote to (never removed by `--overwrite`).
+pub const LOCK: &str = ".visage.lock";
+
 /// The suffix of a file being written (renamed to its name once complete).
 pub const TMP_SUFFIX: &str = ".tmp";
 

@@ -16,6 +16,7 @@ mod atomic_write;
 mod blendshapes_json;
 pub mod file_names;
 mod folder;
+mod folder_lock;
 mod json_records;
 mod landmarks;
 mod live_link_csv;
@@ -31,7 +32,8 @@ mod error;
 pub use atomic_write::{tmp_path, write_atomically, write_json_atomically};
 pub use blendshapes_json::BlendshapesJsonWriter;
 pub use error::RunFolderError;
-pub use folder::{claim, clear_outputs, inspect, Cleared, FolderContents};
+pub use folder::{claim, clear_outputs, inspect, Claimed, Cleared, FolderContents};
+pub use folder_lock::{FolderLock, LockHolder};
 pub use json_records::scan_frames;
 pub use landmarks::{FaceRecord, LandmarksFrame, PoseRecord};
 pub use live_link_csv::{

@@ -72,6 +72,11 @@ pub fn run(args: ExportCommandArgs) -> anyhow::Result<()> {
             preview: false,
         };
     }
+    // One writer at a time in a run's folder (a run still going there, another export).
+    let _lock = visage::run_folder::inspect(&args.dir)?
+        .written_by_visage()
+        .then(|| visage::run_folder::FolderLock::acquire(&args.dir))
+        .transpose()?;
     let summary = exports_into(&args.dir, &exports, None)?;
     if !args.quiet {
         print_summary(&args.dir, &summary);

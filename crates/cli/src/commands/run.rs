@@ -231,10 +231,17 @@ pub enum FacesArg {
     All,
 }
 
-/// Refuses an output folder that is not empty, or (with `--overwrite`) removes a previous
-/// run's files from it, saying what it found; with `resume`, a run there is continued.
-fn claim_output_folder(out: &std::path::Path, overwrite: bool, resume: bool) -> anyhow::Result<()> {
-    if let Some(cleared) = visage::run_folder::claim(out, overwrite, resume)? {
+/// Takes the output folder for this run: refuses one another process writes into, or one
+/// that is not empty, or (with `--overwrite`) removes a previous run's files from it, saying
+/// what it found; with `resume`, a run there is continued. The returned lock is held until
+/// dropped.
+fn claim_output_folder(
+    out: &std::path::Path,
+    overwrite: bool,
+    resume: bool,
+) -> anyhow::Result<visage::run_folder::FolderLock> {
+    let claimed = visage::run_folder::claim(out, overwrite, resume)?;
+    if let Some(cleared) = claimed.cleared {
         eprintln!(
             "--overwrite: removed {} entries of the previous run from {} (it held {})",
             cleared.removed.len(),
@@ -242,7 +249,7 @@ fn claim_output_folder(out: &std::path::Path, overwrite: bool, resume: bool) -> 
             cleared.held
         );
     }
-    Ok(())
+    Ok(claimed.lock)
 }
 
 impl PipelineArgs {
@@ -514,7 +521,7 @@ pub fn run_with_stop(
     std::fs::metadata(p.input_path())
         .with_context(|| format!("{}: cannot read the input", p.input_path().display()))?;
     // With --resume, a previous run is continued rather than refused.
-    claim_output_folder(&args.out, args.overwrite, args.resume)?;
+    let _lock = claim_output_folder(&args.out, args.overwrite, args.resume)?;
     // Ctrl-C ends the input: the frames read so far go through and are written.
     if args.faces == FacesArg::Largest {
         return run_face(&args, &args.out, FaceTarget::Largest, stop).map(|_| ());

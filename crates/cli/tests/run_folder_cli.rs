@@ -1,0 +1,159 @@
+//! The output folder as one writer's: a second run (or an `--overwrite`, or an export) into a
+//! folder in use is refused at once naming the first, and `--overwrite` removes nothing from a
+//! folder that no run wrote to.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+use common::{inputs, s, visage};
+use visage::run_folder::FolderLock;
+
+/// Every file under `dir`, relative, sorted.
+fn files(dir: &Path) -> Vec<String> {
+    fn walk(root: &Path, dir: &Path, out: &mut Vec<String>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(root, &p, out);
+            } else {
+                out.push(p.strip_prefix(root).unwrap().to_string_lossy().into_owned());
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(dir, dir, &mut out);
+    out.sort();
+    out
+}
+
+/// A folder of the user's whose names are a run's: `--overwrite` used to delete them all.
+fn users_folder(dir: &Path) {
+    for (name, text) in [
+        ("mesh.obj", "v 0 0 0\n"),
+        ("camera.json", "{\"mine\": true}"),
+        ("texture.png", "not a png"),
+        ("meshes/scan_final.ply", "ply\n"),
+        ("plots/figure.svg", "<svg/>"),
+        ("notes.txt", "mine"),
+    ] {
+        let path = dir.join(name);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, text).unwrap();
+    }
+}
+
+#[test]
+fn overwrite_removes_nothing_from_a_folder_no_run_wrote_to() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("work");
+    users_folder(&out);
+    let before = files(&out);
+    // The folder is judged before the input is opened: any file will do.
+    let input = tmp.path().join("clip.mp4");
+    std::fs::write(&input, b"x").unwrap();
+    let o = visage(&["run", s(&input), "--out", s(&out), "--overwrite"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("does not hold one")
+            && err.contains("mesh.obj")
+            && err.contains("meshes/")
+            && err.contains("Nothing was removed"),
+        "{err}"
+    );
+    // Every file is still there, and nothing marks the folder as a run's: a second try is
+    // refused the same way.
+    assert_eq!(files(&out), before);
+    let o = visage(&["run", s(&input), "--out", s(&out), "--overwrite"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(files(&out), before);
+}
+
+#[test]
+fn a_folder_in_use_is_refused_at_once_naming_its_user() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let input = tmp.path().join("clip.mp4");
+    std::fs::write(&input, b"x").unwrap();
+    // This test process holds the folder, as a run would.
+    let lock = FolderLock::acquire(&out).unwrap();
+    let me = format!("pid {}", std::process::id());
+    for extra in [&[][..], &["--overwrite"], &["--resume"]] {
+        let mut args = vec!["run", s(&input), "--out", s(&out)];
+        args.extend_from_slice(extra);
+        let o = visage(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(
+            err.contains("in use") && err.contains(&me),
+            "{extra:?}: {err}"
+        );
+    }
+    // Once it lets go, the folder is free (an empty folder: the run goes on to the input).
+    drop(lock);
+    let o = visage(&["run", s(&input), "--out", s(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("in use"), "{err}");
+}
+
+/// Two real runs into one folder: the second is refused at once, naming the first by its
+/// process id, and the first's files are untouched by it; a killed run's lock goes with it.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_second_run_into_the_same_folder_is_refused_naming_the_first() {
+    let (models, clip) = inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["run", s(&clip), "--out", s(&out), "--models", s(&models)];
+        args.extend_from_slice(extra);
+        args.iter().map(|a| a.to_string()).collect::<Vec<_>>()
+    };
+    let mut first = Command::new(env!("CARGO_BIN_EXE_visage"))
+        .args(run(&["--ply"]))
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let pid = format!("pid {}", first.id());
+    // Wait until the first run holds the folder and has written a frame.
+    let started = std::time::Instant::now();
+    while !out.join("meshes/000002.ply").exists() {
+        assert!(
+            started.elapsed().as_secs() < 120,
+            "the first run wrote no frame"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    for extra in [&[][..], &["--overwrite"]] {
+        let args = run(extra);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = visage(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(
+            err.contains("in use") && err.contains(&pid),
+            "{extra:?}: {err}"
+        );
+    }
+    let o = visage(&["export", s(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("in use") && err.contains(&pid), "{err}");
+    // The first run is still writing: it was not disturbed.
+    assert!(first.try_wait().unwrap().is_none(), "the first run stopped");
+    first.kill().unwrap();
+    first.wait().unwrap();
+    // Killed, it holds nothing: --overwrite replaces its files.
+    let args = run(&["--overwrite", "--max-frames", "3", "--quiet"]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let o = visage(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        common::json(&out.join("metrics.json"))["status"],
+        "complete"
+    );
+}
