@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
-use visage_run_folder::file_names;
+use visage_run_folder::{file_names, FolderLock};
 
 use crate::clip_runner::{ClipError, ClipRunner};
 use crate::error::Error;
@@ -58,8 +58,9 @@ impl Worker {
         ))
     }
 
-    /// Removes what earlier, killed workers left in `.partial/` for `clips` (this shard's):
-    /// one live worker per shard is assumed.
+    /// Removes what earlier, killed workers left in `.partial/` for `clips` (this shard's). A
+    /// folder whose run folder lock is held (`visage_run_folder::FolderLock`: a live worker,
+    /// started twice on the same shard, is writing there) is left alone.
     pub fn clear_stale(&self, clips: &[Clip]) -> Result<usize, Error> {
         let dir = self.out.join(PARTIAL);
         let Ok(entries) = std::fs::read_dir(&dir) else {
@@ -74,6 +75,14 @@ impl Worker {
             let path = entry.map_err(Error::Io)?.path();
             let name = path.file_name().unwrap_or_default().to_string_lossy();
             if ours.contains(name.split('.').next().unwrap_or_default()) {
+                let live = path.join(file_names::LOCK).exists()
+                    && matches!(
+                        FolderLock::acquire(&path),
+                        Err(visage_run_folder::RunFolderError::Locked { .. })
+                    );
+                if live {
+                    continue;
+                }
                 remove_dir_all(&path)?;
                 removed += 1;
             }
@@ -459,6 +468,15 @@ mod tests {
         std::fs::create_dir_all(partial.join(&ours)).unwrap();
         std::fs::create_dir_all(partial.join(&theirs)).unwrap();
         assert_eq!(worker.clear_stale(&clips).unwrap(), 1);
-        assert!(partial.join(theirs).exists() && !partial.join(ours).exists());
+        assert!(partial.join(&theirs).exists() && !partial.join(&ours).exists());
+
+        // A clip folder that a live worker's run holds is left alone until it lets go.
+        std::fs::create_dir_all(partial.join(&ours)).unwrap();
+        let live = FolderLock::acquire(&partial.join(&ours)).unwrap();
+        assert_eq!(worker.clear_stale(&clips).unwrap(), 0);
+        assert!(partial.join(&ours).exists());
+        drop(live);
+        assert_eq!(worker.clear_stale(&clips).unwrap(), 1);
+        assert!(!partial.join(&ours).exists());
     }
 }

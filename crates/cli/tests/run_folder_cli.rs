@@ -157,3 +157,106 @@ fn a_second_run_into_the_same_folder_is_refused_naming_the_first() {
         "complete"
     );
 }
+
+/// A run stopped at its frame limit and resumed further lists every frame in metrics.json,
+/// so the exports work, and they equal an uninterrupted run's byte for byte.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_resumed_run_exports_as_the_uninterrupted_one() {
+    let (models, clip) = inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let (resumed, whole) = (tmp.path().join("resumed"), tmp.path().join("whole"));
+    let run = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "run",
+            s(&clip),
+            "--out",
+            s(out),
+            "--models",
+            s(&models),
+            "--quiet",
+        ];
+        args.extend_from_slice(extra);
+        common::run_ok(&args);
+    };
+    run(&resumed, &["--max-frames", "10"]);
+    run(&resumed, &["--resume", "--max-frames", "30"]);
+    run(&whole, &["--max-frames", "30"]);
+    let metrics = common::json(&resumed.join("metrics.json"));
+    let indices: Vec<u64> = metrics["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["index"].as_u64().unwrap())
+        .collect();
+    assert_eq!(indices, (0..30).collect::<Vec<u64>>());
+    for out in [&resumed, &whole] {
+        common::run_ok(&["export", s(out), "--glb", "--quiet"]);
+    }
+    for file in ["sequence.pc2", "blendshapes.csv", "sequence.glb"] {
+        assert!(
+            std::fs::read(resumed.join(file)).unwrap() == std::fs::read(whole.join(file)).unwrap(),
+            "{file} differs from the uninterrupted run's"
+        );
+    }
+}
+
+/// A killed run resumed lists every frame (the kept ones' records rebuilt), and a resume with
+/// a frame limit below what the folder holds is refused instead of leaving the files and
+/// metrics.json disagreeing.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_killed_run_resumes_to_a_folder_whose_files_agree() {
+    let (models, clip) = inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let args = |extra: &[&str]| {
+        let mut a = vec![
+            "run",
+            s(&clip),
+            "--out",
+            s(&out),
+            "--models",
+            s(&models),
+            "--ply",
+        ];
+        a.extend_from_slice(extra);
+        a.iter().map(|x| x.to_string()).collect::<Vec<_>>()
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_visage"))
+        .args(args(&[]))
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while !out.join("meshes/000012.ply").exists() {
+        assert!(started.elapsed().as_secs() < 120, "the run wrote no frame");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let held = std::fs::read_dir(out.join("meshes")).unwrap().count();
+
+    let a = args(&["--resume", "--max-frames", "3"]);
+    let o = visage(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("already holds") && err.contains("--max-frames 3"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_dir(out.join("meshes")).unwrap().count(), held);
+
+    let a = args(&["--resume", "--max-frames", "40", "--quiet"]);
+    common::run_ok(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let metrics = common::json(&out.join("metrics.json"));
+    assert_eq!(metrics["status"], "complete");
+    assert_eq!(metrics["frames"].as_array().unwrap().len(), 40);
+    common::run_ok(&["export", s(&out), "--glb", "--quiet"]);
+}

@@ -609,8 +609,9 @@ pub struct Report<P: Serialize> {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub selection: Option<crate::FrameSelection>,
     /// A resumed run: where it continued, and what the files kept from before. `frames`
-    /// lists the frames after the resume point; the summary covers every frame this run
-    /// processed, its warm-up included.
+    /// in `metrics.json` lists every frame the files hold (the kept frames' records first,
+    /// `ResumePoint::kept_records`); the summary covers every frame this run processed, its
+    /// warm-up included.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub resumed: Option<crate::ResumePoint>,
     pub mesh: MeshSummary,

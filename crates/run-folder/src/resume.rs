@@ -112,8 +112,7 @@ pub fn prepare_resume<P: RunParameters>(
     }
     // A complete run that stopped at its frame limit (not at the input's end) goes on when
     // the limit is raised.
-    let frames = metrics["frames"].as_array().map_or(0, Vec::len)
-        + metrics["resumed"]["frames"].as_u64().unwrap_or(0) as usize;
+    let frames = listed_frames(&metrics);
     let limit = metrics["selection"]["max_frames"]
         .as_u64()
         .map(|m| m as usize);
@@ -147,8 +146,18 @@ pub fn prepare_resume<P: RunParameters>(
     if whole == 0 {
         return start_again(dir);
     }
+    if let Some(max) = run.selection.max_frames {
+        if max < scan.records.len() {
+            return Err(refuse(format!(
+                "it already holds {} frames, more than --max-frames {max}. Resume with a larger \
+                 --max-frames (or none), or pass --overwrite to start again",
+                scan.records.len()
+            )));
+        }
+    }
     let kept = &scan.records[..whole];
     let after_frame = kept[whole - 1].0.index;
+    let kept_records = kept_records(&metrics, kept.iter().map(|(r, _)| r));
     let frame_indices: Vec<usize> = kept.iter().map(|(r, _)| r.index).collect();
     let meshed_indices: Vec<usize> = kept
         .iter()
@@ -275,7 +284,53 @@ pub fn prepare_resume<P: RunParameters>(
         } else {
             cache_indices
         },
+        kept_records,
     }))
+}
+
+/// The kept frames' `metrics.json` records: the previous run's own where it has them (its
+/// `frames` list, which after a resume lists every frame too), else rebuilt from the frame's
+/// landmarks record.
+fn kept_records<'a>(
+    metrics: &serde_json::Value,
+    kept: impl Iterator<Item = &'a LandmarksRecord>,
+) -> Vec<serde_json::Value> {
+    let listed: std::collections::HashMap<u64, &serde_json::Value> = metrics["frames"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|f| Some((f["index"].as_u64()?, f)))
+        .collect();
+    kept.map(|r| match listed.get(&(r.index as u64)) {
+        Some(&f) => f.clone(),
+        None => {
+            let pose = r.faces.first().and_then(|f| f.pose.clone());
+            serde_json::json!({
+                "index": r.index,
+                "source": r.source,
+                "status": if r.meshed() { "solved" } else { "no_face" },
+                "pose": pose,
+                "restored": true,
+            })
+        }
+    })
+    .collect()
+}
+
+/// The frames a run's `metrics.json` accounts for. A resumed run lists every frame; one
+/// written before that was so listed only its new frames, after `resumed.after_frame`, and
+/// counted the kept ones in `resumed.frames`.
+fn listed_frames(metrics: &serde_json::Value) -> usize {
+    let listed = metrics["frames"].as_array().map_or(&[][..], Vec::as_slice);
+    let first = listed.first().and_then(|f| f["index"].as_u64());
+    let after = metrics["resumed"]["after_frame"].as_u64();
+    match (first, after) {
+        (Some(first), Some(after)) if first > after => {
+            listed.len() + metrics["resumed"]["frames"].as_u64().unwrap_or(0) as usize
+        }
+        (None, Some(_)) => metrics["resumed"]["frames"].as_u64().unwrap_or(0) as usize,
+        _ => listed.len(),
+    }
 }
 
 /// A previous run with no frame worth keeping: its files go and the run starts afresh.
@@ -288,6 +343,8 @@ fn start_again(dir: &Path) -> Result<ResumeState, Error> {
 #[derive(Deserialize)]
 struct LandmarksRecord {
     index: usize,
+    #[serde(default)]
+    source: String,
     faces: Vec<FaceEntry>,
 }
 
@@ -295,6 +352,8 @@ struct LandmarksRecord {
 struct FaceEntry {
     /// Present when the frame was meshed.
     fused_landmarks: Option<serde::de::IgnoredAny>,
+    /// The metric face fit's pose, as `metrics.json` records it.
+    pose: Option<serde_json::Value>,
 }
 
 impl LandmarksRecord {

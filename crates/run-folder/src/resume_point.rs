@@ -85,4 +85,11 @@ pub struct ResumePoint {
     /// cache starts afresh.
     #[serde(skip)]
     pub cache_indices: Vec<usize>,
+    /// The kept frames' records for `metrics.json`, in order: the previous run's own where its
+    /// `metrics.json` has them, else rebuilt from `landmarks.json` (index, source, status,
+    /// pose; marked `"restored": true`) for a run killed before it wrote them. The resumed
+    /// run's `metrics.json` lists these, then its new frames, so that it lists every frame the
+    /// files hold.
+    #[serde(skip)]
+    pub kept_records: Vec<serde_json::Value>,
 }

@@ -182,16 +182,42 @@ pub fn run_into(
     }
     let mut report = outcome.report(&options.input_name);
     report.selection = Some(selection);
-    // The warm-up frames' records are the previous run's.
+    // The warm-up frames' records are the previous run's, unless it was killed before it
+    // wrote them: then the warm-up's own stand for them.
     let mut earlier_meshed = 0;
+    let mut warm_up_records = std::collections::HashMap::new();
     if let Some(point) = &point {
         let warm_up = |f: &FrameMetrics| f.index <= point.after_frame;
         let warm_meshed = report.frames.iter().filter(|f| warm_up(f) && f.has_mesh());
         earlier_meshed = point.meshed.saturating_sub(warm_meshed.count());
+        for f in report.frames.iter().filter(|f| warm_up(f)) {
+            if let Ok(v) = serde_json::to_value(f) {
+                warm_up_records.insert(f.index, v);
+            }
+        }
         report.frames.retain(|f| !warm_up(f));
     }
     report.resumed = point.clone();
-    out.write_metrics(&report)?;
+    // Every frame the files hold: the kept frames' records, then this run's new ones.
+    let mut metrics = serde_json::to_value(&report).map_err(|e| {
+        Error::from(visage_run_folder::RunFolderError::Input {
+            path: dir.join(visage_run_folder::file_names::METRICS),
+            reason: format!("cannot encode the run's figures: {e}"),
+        })
+    })?;
+    if let (Some(point), Some(frames)) = (&point, metrics["frames"].as_array_mut()) {
+        let kept = point.kept_records.iter().map(|r| {
+            let warm = r["restored"]
+                .as_bool()
+                .unwrap_or(false)
+                .then(|| r["index"].as_u64())
+                .flatten()
+                .and_then(|i| warm_up_records.remove(&(i as usize)));
+            warm.unwrap_or_else(|| r.clone())
+        });
+        frames.splice(0..0, kept.collect::<Vec<_>>());
+    }
+    out.write_metrics(&metrics)?;
     Ok(FolderRun {
         meshed: earlier_meshed + outcome.summary.solved + outcome.summary.carried,
         frames: outcome.frames.len(),
