@@ -125,3 +125,20 @@ pub fn require(path: PathBuf) -> PathBuf {
     );
     path
 }
+
+/// `jpeg` (a JPEG file's bytes) with an EXIF block whose only tag is the orientation
+/// (0x0112; 1 upright, 6 stored turned so that showing it needs a quarter turn clockwise, …),
+/// inserted after the start-of-image marker: what a phone writes for a portrait photo.
+pub fn with_exif_orientation(jpeg: &[u8], orientation: u16) -> Vec<u8> {
+    // "Exif\0\0", a little-endian TIFF header, IFD0 with one entry (tag 0x0112, SHORT,
+    // count 1, the value) and no next IFD.
+    let mut app1 = b"Exif\0\0II*\0\x08\0\0\0\x01\0\x12\x01\x03\0\x01\0\0\0".to_vec();
+    app1.extend_from_slice(&orientation.to_le_bytes());
+    app1.extend_from_slice(&[0; 6]);
+    let mut out = jpeg[..2].to_vec();
+    out.extend_from_slice(&[0xFF, 0xE1]);
+    out.extend_from_slice(&((app1.len() + 2) as u16).to_be_bytes());
+    out.extend_from_slice(&app1);
+    out.extend_from_slice(&jpeg[2..]);
+    out
+}

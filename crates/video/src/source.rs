@@ -13,16 +13,37 @@ pub fn is_image_path(path: &Path) -> bool {
         .is_some_and(|e| IMAGE_EXTENSIONS.iter().any(|x| x.eq_ignore_ascii_case(e)))
 }
 
-/// Reads one image file as RGB8.
+/// Whether a file's name starts with a dot (hidden on Unix; macOS writes `._name` beside
+/// files copied to foreign disks).
+fn is_hidden(path: &Path) -> bool {
+    path.file_name()
+        .is_some_and(|n| n.to_string_lossy().starts_with('.'))
+}
+
+/// Reads one image file as RGB8, turned upright as its EXIF orientation says (a phone's
+/// portrait photo is stored sideways with a tag that says so; video rotation metadata is
+/// honoured the same way by the video reader).
 pub fn read_image(path: &Path) -> Result<Frame, VideoError> {
+    use image::ImageDecoder;
     let bytes = std::fs::read(path).map_err(|source| VideoError::Io {
         path: path.to_owned(),
         source,
     })?;
-    let img = image::load_from_memory(&bytes).map_err(|e| VideoError::Image {
+    let in_words = |e: image::ImageError| VideoError::Image {
         path: path.to_owned(),
         reason: image_error_in_words(&e),
-    })?;
+    };
+    let mut decoder = image::ImageReader::new(std::io::Cursor::new(&bytes))
+        .with_guessed_format()
+        .map_err(|e| in_words(image::ImageError::IoError(e)))?
+        .into_decoder()
+        .map_err(in_words)?;
+    // An unreadable orientation tag is no orientation: the pixels as stored.
+    let orientation = decoder
+        .orientation()
+        .unwrap_or(image::metadata::Orientation::NoTransforms);
+    let mut img = image::DynamicImage::from_decoder(decoder).map_err(in_words)?;
+    img.apply_orientation(orientation);
     Ok(Frame {
         index: 0,
         source: path.display().to_string(),
@@ -87,8 +108,9 @@ pub enum FrameSource {
 }
 
 impl FrameSource {
-    /// Opens `path`: a folder → its `.png/.jpg/.jpeg` files sorted by name; an image file → that
-    /// image; anything else → a video through FFmpeg.
+    /// Opens `path`: a folder → its `.png/.jpg/.jpeg` files sorted by name (hidden files left
+    /// out: macOS's `._name.jpg` resource forks and other dot-files are not frames); an image
+    /// file → that image; anything else → a video through FFmpeg.
     pub fn open(path: &Path) -> Result<FrameSource, VideoError> {
         let meta = std::fs::metadata(path).map_err(|source| VideoError::Io {
             path: path.to_owned(),
@@ -101,7 +123,7 @@ impl FrameSource {
             })?;
             let mut paths: Vec<PathBuf> = entries
                 .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| is_image_path(p))
+                .filter(|p| is_image_path(p) && !is_hidden(p))
                 .collect();
             if paths.is_empty() {
                 return Err(VideoError::EmptyFolder {
@@ -225,5 +247,58 @@ impl Iterator for FrameSource {
                 }))
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A JPEG of `w`×`h` whose left half is white, with an EXIF orientation tag when given.
+    fn jpeg(w: u32, h: u32, orientation: Option<u16>) -> Vec<u8> {
+        let img = image::RgbImage::from_fn(w, h, |x, _| {
+            if x < w / 2 {
+                image::Rgb([255, 255, 255])
+            } else {
+                image::Rgb([0, 0, 0])
+            }
+        });
+        let mut bytes = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, 95)
+            .encode_image(&img)
+            .unwrap();
+        match orientation {
+            Some(o) => visage_testdata::with_exif_orientation(&bytes, o),
+            None => bytes,
+        }
+    }
+
+    #[test]
+    fn a_folder_leaves_hidden_files_out() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("a.jpg"), jpeg(8, 8, None)).unwrap();
+        std::fs::write(dir.path().join("._a.jpg"), b"\0\x05\x16\x07 AppleDouble").unwrap();
+        match FrameSource::open(dir.path()).unwrap() {
+            FrameSource::Images { paths, .. } => {
+                assert_eq!(paths, [dir.path().join("a.jpg")]);
+            }
+            _ => panic!("not an image folder"),
+        }
+    }
+
+    #[test]
+    fn a_photo_is_turned_upright_as_its_exif_orientation_says() {
+        let dir = tempfile::tempdir().unwrap();
+        let plain = dir.path().join("plain.jpg");
+        std::fs::write(&plain, jpeg(64, 32, None)).unwrap();
+        let f = read_image(&plain).unwrap();
+        assert_eq!(f.image.dimensions(), (64, 32));
+        // Orientation 6: stored sideways, shown turned 90° clockwise. The white left half of
+        // the stored pixels becomes the top half.
+        let sideways = dir.path().join("portrait.jpg");
+        std::fs::write(&sideways, jpeg(64, 32, Some(6))).unwrap();
+        let f = read_image(&sideways).unwrap();
+        assert_eq!(f.image.dimensions(), (32, 64));
+        assert!(f.image.get_pixel(16, 8)[0] > 200 && f.image.get_pixel(16, 56)[0] < 50);
     }
 }
