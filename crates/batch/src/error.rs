@@ -75,6 +75,12 @@ pub enum Error {
     /// `batch status` on a folder no worker has recorded, without `--manifest`.
     #[error("{}: no batch.json (no worker has started there); pass --manifest", dir.display())]
     NoBatchRecord { dir: PathBuf },
+    /// `batch status` of a folder that does not exist.
+    #[error(
+        "{}: no such folder (a batch folder is the --out of `visage batch`)",
+        dir.display()
+    )]
+    NoBatchFolder { dir: PathBuf },
     /// The batch folder could not be created.
     #[error("{}: cannot create the batch folder", path.display())]
     CreateBatchFolder {

@@ -64,7 +64,9 @@ pub fn read(path: &Path) -> Result<Vec<Clip>, Error> {
 
 /// [`read`] of manifest text whose relative paths are relative to `base`.
 pub fn parse(text: &str, base: &Path, json_lines: bool) -> Result<Vec<Clip>, ManifestError> {
+    // A byte-order mark (Windows editors write one) is not part of the first line.
     let entries = text
+        .trim_start_matches('\u{feff}')
         .lines()
         .enumerate()
         .map(|(i, l)| (i + 1, l.trim()))

@@ -76,6 +76,11 @@ impl BatchStatus {
         let manifest_path = match (manifest, &recorded) {
             (Some(m), _) => m.to_owned(),
             (None, Some(r)) => r.manifest.clone(),
+            (None, None) if !dir.is_dir() => {
+                return Err(Error::NoBatchFolder {
+                    dir: dir.to_owned(),
+                })
+            }
             (None, None) => {
                 return Err(Error::NoBatchRecord {
                     dir: dir.to_owned(),
@@ -198,6 +203,9 @@ mod tests {
     fn missing_failed_and_the_recorded_manifest() {
         let tmp = tempfile::tempdir().unwrap();
         let out = tmp.path().join("out");
+        let err = visage::error_chain(&BatchStatus::read(&out, None, None).unwrap_err());
+        assert!(err.ends_with("no such folder (a batch folder is the --out of `visage batch`)"));
+        std::fs::create_dir_all(&out).unwrap();
         let err = visage::error_chain(&BatchStatus::read(&out, None, None).unwrap_err());
         assert!(err.ends_with("no batch.json (no worker has started there); pass --manifest"));
         let manifest = tmp.path().join("m.txt");

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum CameraError {
     /// An intrinsic parameter is non-positive or not finite.
-    #[error("invalid intrinsics: {field} = {value} ({reason})")]
+    #[error("invalid intrinsics: {field} = {} ({reason})", crate::number(*.value))]
     InvalidIntrinsics {
         field: &'static str,
         value: f64,

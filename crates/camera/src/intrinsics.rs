@@ -109,10 +109,13 @@ impl Intrinsics {
     /// [`Intrinsics::load_json`] of a file's text already in memory; `path` is the file it came
     /// from, named in errors.
     pub fn parse_json(text: &str, path: &Path) -> Result<Self, CameraError> {
-        let k: Intrinsics = serde_json::from_str(text).map_err(|source| CameraError::Json {
-            path: path.to_owned(),
-            source,
-        })?;
+        let k: Intrinsics =
+            serde_json::from_str(text.trim_start_matches('\u{feff}')).map_err(|source| {
+                CameraError::Json {
+                    path: path.to_owned(),
+                    source,
+                }
+            })?;
         k.validate()
             .map_err(|e| CameraError::InvalidIntrinsicsFile {
                 path: path.to_owned(),

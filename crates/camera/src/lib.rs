@@ -15,6 +15,7 @@ mod depth_map;
 mod depth_png;
 mod error;
 mod intrinsics;
+mod number;
 mod rigid_fit;
 mod rigid_transform;
 pub mod vec3;
@@ -26,5 +27,6 @@ pub use error::CameraError;
 pub use intrinsics::{
     Intrinsics, DEFAULT_FOV_DEG, FOV_RANGE_DEG, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE,
 };
+pub use number::number;
 pub use rigid_fit::{horn_rotation, quaternion_to_matrix};
 pub use rigid_transform::{RigidTransform, ROTATION_TOLERANCE};

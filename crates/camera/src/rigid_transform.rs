@@ -138,7 +138,7 @@ impl RigidTransform {
             path: path.to_owned(),
             reason,
         };
-        let t: RigidTransform = serde_json::from_str(text)
+        let t: RigidTransform = serde_json::from_str(text.trim_start_matches('\u{feff}'))
             .map_err(|e| file_err(format!("not a valid pose file: {e}")))?;
         t.validate().map_err(|e| file_err(e.to_string()))?;
         Ok(t)

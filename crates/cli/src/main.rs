@@ -18,7 +18,7 @@ mod progress;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Temporally stable, metric 3-D face meshes from RGB video, in real time on a CPU.
 ///
@@ -105,7 +105,13 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // A negative number is a value (`--fov-deg -5` is then refused by its range check, which
+    // says why), not an unknown flag; clap does not pass this setting down by itself.
+    let command = Cli::command().mut_subcommands(|c| c.allow_negative_numbers(true));
+    let cli = match Cli::from_arg_matches(&command.get_matches()) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
     let result = match cli.command {
         Command::Run(args) => commands::run::run(args),
         Command::Batch(args) => commands::batch::run(args),

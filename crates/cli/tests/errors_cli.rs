@@ -101,6 +101,48 @@ const CASES: &[Case] = &[
         models: false,
     },
     Case {
+        what: "a weight too large for double precision",
+        args: &["run", "{dir}/face.png", "--out", "{dir}/o20", "--lambda", "1e308"],
+        exit: 2,
+        says: "invalid weight lambda = 1e308: must lie between 0 and 1e6 (larger leaves the data term no weight in double precision)",
+        models: true,
+    },
+    Case {
+        what: "a huge number",
+        args: &["run", "{dir}/face.png", "--out", "{dir}/o21", "--fov-deg", "1e300"],
+        exit: 2,
+        says: "--fov-deg 1e300: must lie between 5 and 170 degrees",
+        models: false,
+    },
+    Case {
+        what: "a negative number",
+        args: &["run", "{dir}/face.png", "--out", "{dir}/o22", "--fov-deg", "-5"],
+        exit: 2,
+        says: "--fov-deg -5: must lie between 5 and 170 degrees",
+        models: false,
+    },
+    Case {
+        what: "a file that is not a mesh by its name",
+        args: &["render", "{dir}/full/notes.txt", "--intrinsics", "{dir}/cam.json"],
+        exit: 2,
+        says: "full/notes.txt: not a mesh file visage reads: the name ends in .txt; a mesh is a .obj or .ply file",
+        models: false,
+    },
+    Case {
+        what: "`visage export` of a folder that is not a run",
+        args: &["export", "{dir}/full"],
+        exit: 2,
+        says: "full: not a visage run folder (it has no metrics.json): `visage run INPUT --out` into it makes one, then export",
+        models: false,
+    },
+    Case {
+        what: "`visage batch status` of a missing folder",
+        args: &["batch", "status", "{dir}/nothere"],
+        exit: 2,
+        says: "nothere: no such folder (a batch folder is the --out of `visage batch`)",
+        models: false,
+    },
+    Case {
         what: "an output folder under a file",
         args: &["run", "{dir}/face.png", "--out", "{dir}/tri.obj/out"],
         exit: 2,
@@ -184,6 +226,10 @@ fn make_files(dir: &Path) {
     png[half..].fill(0x5a);
     write("corrupt.png", &png);
     write("garbage.ply", b"this is not a mesh\n");
+    write(
+        "cam.json",
+        br#"{"width": 64, "height": 48, "fx": 60, "fy": 60, "cx": 31.5, "cy": 23.5}"#,
+    );
     image::RgbImage::from_pixel(320, 240, image::Rgb([128, 128, 128]))
         .save(dir.join("grey.png"))
         .unwrap();
@@ -260,6 +306,14 @@ fn the_table_lists_every_case_and_only_them() {
 /// Rows of the table whose test lives with its command's other tests (they need a clip and
 /// signals): the row's first column and the test's name.
 const OTHER_TESTS: &[(&str, &str)] = &[
+    (
+        "an output folder another run is writing into",
+        "run_folder_cli::a_second_run_into_the_same_folder_is_refused_naming_the_first",
+    ),
+    (
+        "`--resume` with a frame limit below the frames written",
+        "run_folder_cli::a_killed_run_resumes_to_a_folder_whose_files_agree",
+    ),
     (
         "Ctrl-C or SIGTERM during a run",
         "run_cli::ctrl_c_stops_after_a_frame_and_keeps_the_work",
@@ -345,4 +399,32 @@ fn bad_inputs_with_models_give_the_documented_exit_and_message() {
     for case in CASES.iter().filter(|c| c.models) {
         check(case, tmp.path());
     }
+}
+
+/// A JSON file that starts with a UTF-8 byte-order mark (Windows editors write one) is read.
+#[test]
+fn json_with_a_byte_order_mark_is_read() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    std::fs::write(
+        dir.join("bom.json"),
+        "\u{feff}{\"width\": 64, \"height\": 48, \"fx\": 60, \"fy\": 60, \"cx\": 31.5, \"cy\": 23.5}",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("tri.obj"),
+        "v 0 0 1\nv 0.1 0 1\nv 0 0.1 1\nf 1 2 3\n",
+    )
+    .unwrap();
+    let out = dir.join("tri.png");
+    let o = common::visage(&[
+        "render",
+        s(&dir.join("tri.obj")),
+        "--intrinsics",
+        s(&dir.join("bom.json")),
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.is_file());
 }

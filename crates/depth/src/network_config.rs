@@ -202,10 +202,11 @@ impl NetworkConfig {
 
     /// [`NetworkConfig::load`] of text already read from `path`.
     pub fn parse(text: &str, path: &Path) -> Result<NetworkConfig, DepthError> {
-        let config: NetworkConfig = serde_json::from_str(text).map_err(|e| DepthError::Config {
-            path: path.to_owned(),
-            reason: e.to_string(),
-        })?;
+        let config: NetworkConfig = serde_json::from_str(text.trim_start_matches('\u{feff}'))
+            .map_err(|e| DepthError::Config {
+                path: path.to_owned(),
+                reason: e.to_string(),
+            })?;
         config.validate().map_err(|reason| DepthError::Config {
             path: path.to_owned(),
             reason,

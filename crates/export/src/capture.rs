@@ -61,6 +61,7 @@ impl Capture {
     /// A missing or malformed file (named), or files that do not belong together (a point cache
     /// with another number of frames or vertices than the metrics and the mesh say).
     pub fn open(dir: &Path) -> Result<Capture, ExportError> {
+        check_run_folder(dir)?;
         let intrinsics = Intrinsics::load_json(&dir.join(file_names::CAMERA))?;
         let metrics_path = dir.join(file_names::METRICS);
         let metrics = read_json(&metrics_path)?;
@@ -158,6 +159,47 @@ pub(crate) fn read_json(path: &Path) -> Result<Value, ExportError> {
         path: path.to_owned(),
         reason: e.to_string(),
     })
+}
+
+/// Says what `dir` is when it is not a run that can be exported: no folder, a folder no run
+/// wrote to, a run over every face (its faces are the runs), a run killed before it finished.
+fn check_run_folder(dir: &Path) -> Result<(), ExportError> {
+    let not_a_run = |reason: String| {
+        Err(ExportError::NotARun {
+            dir: dir.to_owned(),
+            reason,
+        })
+    };
+    if !dir.is_dir() {
+        return not_a_run("no such folder".into());
+    }
+    let contents = visage_run_folder::inspect(dir).map_err(|e| ExportError::Read {
+        path: dir.to_owned(),
+        source: std::io::Error::other(e.to_string()),
+    })?;
+    if dir.join(file_names::FACES).is_file() && !dir.join(file_names::METRICS).is_file() {
+        return not_a_run(format!(
+            "a run over every face: each face's run is in its own folder ({}1, {}2, …); \
+             export those",
+            file_names::FACE_FOLDER_PREFIX,
+            file_names::FACE_FOLDER_PREFIX
+        ));
+    }
+    if !contents.written_by_visage() {
+        return not_a_run(format!(
+            "not a visage run folder (it has no {}): `visage run INPUT --out` into it makes \
+             one, then export",
+            file_names::METRICS
+        ));
+    }
+    if contents.status.as_deref() == Some("running") {
+        return not_a_run(format!(
+            "the run there was killed before it finished ({} says \"running\"); finish it \
+             with the same `visage run` command and --resume, then export",
+            file_names::METRICS
+        ));
+    }
+    Ok(())
 }
 
 fn parse_frames(metrics: &Value, path: &Path) -> Result<Vec<CaptureFrame>, ExportError> {

@@ -17,6 +17,9 @@ pub enum ExportError {
     Malformed { path: PathBuf, reason: String },
     #[error("{}: does not match the run's other files: {reason}", path.display())]
     Mismatch { path: PathBuf, reason: String },
+    /// A folder that is not a finished run's, and what to do instead.
+    #[error("{}: {reason}", dir.display())]
+    NotARun { dir: PathBuf, reason: String },
     #[error("{}: no frame has a mesh: nothing to export", path.display())]
     Empty { path: PathBuf },
     #[error(transparent)]

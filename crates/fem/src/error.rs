@@ -7,11 +7,15 @@ pub enum FemError {
     /// A vertex has no area around it (not used by any triangle).
     #[error("vertex {index} belongs to no triangle")]
     IsolatedVertex { index: usize },
-    /// λ or μ is negative or not finite.
-    #[error("invalid weight {name} = {value}: must be finite and ≥ 0")]
+    /// λ or μ is negative, not finite or larger than [`crate::MAX_WEIGHT`].
+    #[error(
+        "invalid weight {name} = {}: must lie between 0 and 1e6 (larger leaves the data term no \
+         weight in double precision)",
+        visage_camera::number(*.value)
+    )]
     InvalidWeight { name: &'static str, value: f64 },
     /// The system matrix is not numerically positive definite.
-    #[error("the system matrix is not positive definite (Cholesky failed: {reason})")]
+    #[error("the system matrix is not positive definite ({reason})")]
     NotPositiveDefinite { reason: String },
     /// Building a sparse matrix failed.
     #[error("sparse matrix assembly failed: {reason}")]

@@ -163,7 +163,11 @@ impl Factorization {
                 Default::default(),
             )
             .map_err(|e| FemError::NotPositiveDefinite {
-                reason: format!("{e:?}"),
+                reason: match e {
+                    faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
+                        format!("the factorisation met a pivot ≤ 0 at row {index}")
+                    }
+                },
             })?;
         let workspace =
             MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(Self::MAX_RHS_COLUMNS, Par::Seq));

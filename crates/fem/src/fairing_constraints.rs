@@ -49,8 +49,8 @@ impl FairingConstraints {
             path: path.to_owned(),
             reason,
         };
-        let file: FairingConstraints =
-            serde_json::from_str(text).map_err(|e| bad(format!("not a constraints file: {e}")))?;
+        let file: FairingConstraints = serde_json::from_str(text.trim_start_matches('\u{feff}'))
+            .map_err(|e| bad(format!("not a constraints file: {e}")))?;
         for (k, c) in file.constraints.iter().enumerate() {
             if c.vertex >= vertices || !(0.0..=1.0).contains(&c.weight) {
                 return Err(bad(format!(

@@ -46,4 +46,4 @@ pub use pixel_quadrature::PixelQuadrature;
 pub use streaming::{StepReport, StreamingSolver};
 pub use surface_metrics::{SurfaceMetrics, SurfaceQuality};
 pub use surface_operators::{boundary_vertices, mixed_areas, surface_geometry, SurfaceGeometry};
-pub use system::{FusionSystem, Operators, Weights};
+pub use system::{FusionSystem, Operators, Weights, MAX_WEIGHT};

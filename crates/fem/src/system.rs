@@ -32,11 +32,15 @@ impl Default for Weights {
     }
 }
 
+/// The largest λ or μ accepted: beyond it the data term has no weight left in double
+/// precision and the factorisation fails.
+pub const MAX_WEIGHT: f64 = 1e6;
+
 impl Weights {
-    /// Errors unless both weights are finite and non-negative.
+    /// Errors unless both weights are finite, non-negative and at most [`MAX_WEIGHT`].
     pub fn validate(&self) -> Result<(), FemError> {
         for (name, value) in [("lambda", self.lambda), ("mu", self.mu)] {
-            if !(value.is_finite() && value >= 0.0) {
+            if !(value.is_finite() && (0.0..=MAX_WEIGHT).contains(&value)) {
                 return Err(FemError::InvalidWeight { name, value });
             }
         }

@@ -67,8 +67,8 @@ impl KeypointsFile {
             reason,
             source: None,
         };
-        let file: KeypointsFile =
-            serde_json::from_str(text).map_err(|e| bad(format!("not a keypoints file: {e}")))?;
+        let file: KeypointsFile = serde_json::from_str(text.trim_start_matches('\u{feff}'))
+            .map_err(|e| bad(format!("not a keypoints file: {e}")))?;
         if file.descriptors.len() != file.keypoints.len() {
             return Err(bad(format!(
                 "{} keypoints but {} descriptors",

@@ -283,7 +283,7 @@ impl Builder {
         match self.landmark_smoothing {
             Some(r) if !(r.is_finite() && r > 0.0) => Err(Error::InvalidOption {
                 name: "--smoothing",
-                value: r.to_string(),
+                value: visage_camera::number(r),
                 reason: "must be a positive number (or \"off\")",
             }),
             r => Ok(r),
@@ -400,7 +400,7 @@ impl Builder {
                 Some(l) => {
                     return Err(Error::InvalidOption {
                         name: "--fair",
-                        value: l.to_string(),
+                        value: visage_camera::number(l),
                         reason: "the smoothing length must be a positive number of millimetres",
                     })
                 }
@@ -451,7 +451,7 @@ pub fn check_fov(fov: f64) -> Result<(), Error> {
     } else {
         Err(Error::InvalidOption {
             name: "--fov-deg",
-            value: fov.to_string(),
+            value: visage_camera::number(fov),
             reason: "must lie between 5 and 170 degrees",
         })
     }

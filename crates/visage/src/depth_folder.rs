@@ -75,7 +75,7 @@ pub fn fuse_depth_folder(
     if options.max_depth_m.is_nan() || options.max_depth_m <= 0.0 {
         return Err(Error::InvalidOption {
             name: "--max-depth",
-            value: options.max_depth_m.to_string(),
+            value: visage_camera::number(options.max_depth_m),
             reason: "must be positive",
         });
     }

@@ -33,6 +33,9 @@ pub enum MeshIoError {
         index: usize,
         count: usize,
     },
+    /// A file that is not a mesh format visage reads (by its name).
+    #[error("{}: {reason}", path.display())]
+    Format { path: PathBuf, reason: String },
     /// The mesh cannot be written in this format.
     #[error("{}: cannot write: {reason}", path.display())]
     Unwritable { path: PathBuf, reason: String },

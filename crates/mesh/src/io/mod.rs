@@ -23,16 +23,28 @@ use std::path::Path;
 /// Reads a mesh by file extension: `.obj` or `.ply` (case-insensitive).
 ///
 /// # Errors
-/// As [`read_obj`] / [`read_ply`]; an unknown extension is a `Syntax` error on line 0.
+/// As [`read_obj`] / [`read_ply`]; an unknown extension is [`MeshIoError::Format`].
 pub fn read_mesh(path: &Path) -> Result<crate::TriMesh, MeshIoError> {
     match extension(path).as_deref() {
         Some("obj") => read_obj(path),
         Some("ply") => read_ply(path),
-        other => Err(MeshIoError::Syntax {
+        other => Err(MeshIoError::Format {
             path: path.to_owned(),
-            line: 0,
-            reason: format!("unknown mesh format {other:?}: expected a .obj or .ply file"),
+            reason: unknown_format(other),
         }),
+    }
+}
+
+/// "the name ends in .txt; a mesh is a .obj or .ply file".
+fn unknown_format(extension: Option<&str>) -> String {
+    match extension {
+        Some(e) => format!(
+            "not a mesh file visage reads: the name ends in .{e}; a mesh is a .obj or .ply file"
+        ),
+        None => {
+            "not a mesh file visage reads: the name has no extension; a mesh is a .obj or .ply file"
+                .to_owned()
+        }
     }
 }
 
@@ -43,7 +55,7 @@ pub fn write_mesh(path: &Path, mesh: &crate::TriMesh) -> Result<(), MeshIoError>
         Some("ply") => write_ply(path, mesh),
         other => Err(MeshIoError::Unwritable {
             path: path.to_owned(),
-            reason: format!("unknown mesh format {other:?}: expected a .obj or .ply file"),
+            reason: unknown_format(other),
         }),
     }
 }
