@@ -1,11 +1,9 @@
 //! What a clip's folder says about it: `done.json` (what was made from what, with checksums)
 //! or `error.json` (why it failed), and the checks that decide whether a clip is done.
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
 use visage_run_folder::file_names;
 
 use crate::error::Error;
@@ -27,27 +25,12 @@ pub struct FileSum {
 impl FileSum {
     /// Reads `path` through once.
     pub fn of(path: &Path) -> Result<Self, Error> {
-        let cannot_read = |source| Error::Read {
-            path: path.to_owned(),
-            source,
-        };
-        let mut file = std::fs::File::open(path).map_err(cannot_read)?;
-        let mut hasher = Sha256::new();
-        let mut buf = vec![0u8; 1 << 20];
-        let mut bytes = 0u64;
-        loop {
-            let n = file.read(&mut buf).map_err(cannot_read)?;
-            if n == 0 {
-                break;
+        let (bytes, sha256) = visage_run_folder::sha256_of(path).map_err(|e| match e {
+            visage_run_folder::RunFolderError::Read { path, source } => {
+                Error::Read { path, source }
             }
-            hasher.update(&buf[..n]);
-            bytes += n as u64;
-        }
-        let sha256 = hasher
-            .finalize()
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect();
+            other => Error::Record(Box::new(other)),
+        })?;
         Ok(FileSum { bytes, sha256 })
     }
 }

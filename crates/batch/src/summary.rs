@@ -137,11 +137,11 @@ mod tests {
         assert_eq!((s.not_run, s.frames, s.interrupted), (1, 10, false));
         assert_eq!(s.failed_ids, ["b"]);
         let line = s.json_line();
-        assert!(line.starts_with(r#"{"clips":4,"cores":"#), "{line}");
         assert!(
-            line.contains(r#""shard":{"count":2,"index":1},"skipped":1}"#),
+            line.starts_with(r#"{"shard":{"index":1,"count":2},"clips":4,"done":1,"skipped":1,"#),
             "{line}"
         );
+        assert!(line.contains(r#""jobs":1,"cores":"#), "{line}");
         assert!(Summary::of(shard, &clips, &results, 1, 2.0, true).interrupted);
     }
 }

@@ -260,3 +260,70 @@ fn a_killed_run_resumes_to_a_folder_whose_files_agree() {
     assert_eq!(metrics["frames"].as_array().unwrap().len(), 40);
     common::run_ok(&["export", s(&out), "--glb", "--quiet"]);
 }
+
+/// The input is the file's content, not the path as typed: a resume may name it relative
+/// where the run named it absolute, `visage export` works from any working folder, and
+/// another clip of the same size at the same path is refused.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn an_input_is_known_by_its_content_not_the_path_typed() {
+    let (models, clip) = inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let copy = tmp.path().join("clip.mp4");
+    std::fs::copy(&clip, &copy).unwrap();
+    let out = tmp.path().join("run");
+    let in_dir = |dir: &Path, args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_visage"))
+            .current_dir(dir)
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let ok = |o: std::process::Output| {
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    let base = ["--out", s(&out), "--models", s(&models), "--quiet"];
+    ok(in_dir(
+        tmp.path(),
+        &[&["run", "clip.mp4", "--max-frames", "5"], &base[..]].concat(),
+    ));
+    ok(in_dir(
+        Path::new("/"),
+        &[
+            &["run", s(&copy), "--resume", "--max-frames", "8"],
+            &base[..],
+        ]
+        .concat(),
+    ));
+    ok(in_dir(
+        Path::new("/"),
+        &["export", s(&out), "--glb", "--quiet"],
+    ));
+    assert_eq!(
+        common::json(&out.join("metrics.json"))["frames"]
+            .as_array()
+            .unwrap()
+            .len(),
+        8
+    );
+
+    // The same size, other bytes.
+    let mut bytes = std::fs::read(&copy).unwrap();
+    let middle = bytes.len() / 2;
+    bytes[middle] ^= 0xff;
+    std::fs::write(&copy, &bytes).unwrap();
+    let o = in_dir(
+        tmp.path(),
+        &[
+            &["run", "clip.mp4", "--resume", "--max-frames", "12"],
+            &base[..],
+        ]
+        .concat(),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("another file's content"), "{err}");
+}

@@ -65,7 +65,14 @@ impl Capture {
         let intrinsics = Intrinsics::load_json(&dir.join(file_names::CAMERA))?;
         let metrics_path = dir.join(file_names::METRICS);
         let metrics = read_json(&metrics_path)?;
-        let input = PathBuf::from(metrics["input"].as_str().unwrap_or_default());
+        // By its absolute path where the run recorded one (the typed one may be relative to
+        // another working folder).
+        let input = PathBuf::from(
+            metrics["input_file"]["path"]
+                .as_str()
+                .or(metrics["input"].as_str())
+                .unwrap_or_default(),
+        );
         let obj = dir.join(file_names::CACHE_MESH);
         let mut mesh = read_obj(&obj)?;
         let cache_path = dir.join(file_names::POINT_CACHE);

@@ -17,6 +17,7 @@ mod blendshapes_json;
 pub mod file_names;
 mod folder;
 mod folder_lock;
+mod input_file;
 mod json_records;
 mod landmarks;
 mod live_link_csv;
@@ -34,6 +35,7 @@ pub use blendshapes_json::BlendshapesJsonWriter;
 pub use error::RunFolderError;
 pub use folder::{claim, clear_outputs, inspect, Claimed, Cleared, FolderContents};
 pub use folder_lock::{FolderLock, LockHolder};
+pub use input_file::{sha256_of, InputFile};
 pub use json_records::scan_frames;
 pub use landmarks::{FaceRecord, LandmarksFrame, PoseRecord};
 pub use live_link_csv::{

@@ -369,6 +369,31 @@ struct BlendshapeRecord {
     index: usize,
 }
 
+/// Whether the input differs, in words: by content where both runs recorded it (the same
+/// bytes under another path, or typed relative instead of absolute, are the same input; a
+/// different file at the same path is not), else by the path, resolved where it can be.
+fn input_difference(before: &serde_json::Value, now: &serde_json::Value) -> Option<String> {
+    let (b, n) = (&before["input_file"], &now["input_file"]);
+    if let (Some(x), Some(y)) = (b["sha256"].as_str(), n["sha256"].as_str()) {
+        return (x != y || b["bytes"] != n["bytes"]).then(|| {
+            format!(
+                "input: another file's content ({} bytes, sha256 {}… then; {} bytes, sha256 {}… \
+                 now)",
+                b["bytes"],
+                &x[..x.len().min(12)],
+                n["bytes"],
+                &y[..y.len().min(12)]
+            )
+        });
+    }
+    let resolved = |v: &serde_json::Value| {
+        let typed = v["input"].as_str().unwrap_or_default();
+        std::fs::canonicalize(typed).unwrap_or_else(|_| PathBuf::from(typed))
+    };
+    (resolved(before) != resolved(now))
+        .then(|| format!("input ({} then, {} now)", before["input"], now["input"]))
+}
+
 /// What differs between the run recorded in `metrics` and `run`, in words (empty: the same).
 /// Both sides go through the same JSON text, so numbers compare exactly.
 fn differences<P: RunParameters>(
@@ -388,6 +413,12 @@ fn differences<P: RunParameters>(
             "selection" => (&every_before, &every_now),
             _ => (&metrics[key], &now[key]),
         };
+        if key == "input" {
+            if let Some(d) = input_difference(metrics, &now) {
+                found.push(d);
+            }
+            continue;
+        }
         if before == after {
             continue;
         }
@@ -633,6 +664,7 @@ mod tests {
     ) -> RunDescription<'a, Parameters> {
         RunDescription {
             input: "clip.mp4",
+            input_file: None,
             intrinsics,
             parameters,
             selection: FrameSelection {

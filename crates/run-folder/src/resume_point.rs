@@ -33,6 +33,10 @@ pub trait RunParameters: Serialize {
 pub struct RunDescription<'a, P> {
     /// The input as given on the command line.
     pub input: &'a str,
+    /// The input file by content, when it is one file (a resumed run must read the same bytes,
+    /// wherever the path is typed from).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub input_file: Option<&'a crate::InputFile>,
     pub intrinsics: &'a Intrinsics,
     pub parameters: &'a P,
     pub selection: FrameSelection,

@@ -24,6 +24,9 @@ pub struct FolderOptions {
     /// The input as the user named it (`metrics.json`'s `input`; a resumed run must name the
     /// same).
     pub input_name: String,
+    /// The input file by content, when it is one file (`metrics.json`'s `input_file`: a
+    /// resumed run must read the same bytes; `visage export` finds it by its absolute path).
+    pub input_file: Option<visage_run_folder::InputFile>,
     /// Continue the run in the folder when it stopped part-way; without it the folder is
     /// written afresh (see [`visage_run_folder::claim`] for refusing one that is not empty).
     pub resume: bool,
@@ -77,6 +80,7 @@ pub fn run_into(
     let selection = input.selection();
     let description = RunDescription {
         input: &options.input_name,
+        input_file: options.input_file.as_ref(),
         intrinsics: reconstructor.intrinsics(),
         parameters: reconstructor.parameters(),
         selection,
@@ -205,6 +209,16 @@ pub fn run_into(
             reason: format!("cannot encode the run's figures: {e}"),
         })
     })?;
+    if let (Some(file), Some(fields)) = (&options.input_file, metrics.as_object_mut()) {
+        // After `input`, where a reader looks for it.
+        let at = fields
+            .keys()
+            .position(|k| k == "input")
+            .map_or(fields.len(), |i| i + 1);
+        if let Ok(v) = serde_json::to_value(file) {
+            fields.shift_insert(at, "input_file".to_owned(), v);
+        }
+    }
     if let (Some(point), Some(frames)) = (&point, metrics["frames"].as_array_mut()) {
         let kept = point.kept_records.iter().map(|r| {
             let warm = r["restored"]

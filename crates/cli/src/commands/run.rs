@@ -608,6 +608,7 @@ fn run_face(
     };
     let options = FolderOptions {
         input_name: p.input_path().display().to_string(),
+        input_file: visage::run_folder::InputFile::of(p.input_path())?,
         resume: args.resume,
         ply: (format, args.ply, args.save_raw),
         blendshapes: !p.no_fit,
