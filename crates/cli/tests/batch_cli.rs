@@ -370,6 +370,10 @@ fn bad_invocations_are_exit_2() {
     assert!(!out.exists(), "nothing is written before the checks pass");
     let (code, err) = run(&["batch", "status", s(&out)]);
     assert_eq!(code, Some(2));
+    assert!(err.contains("no such folder"), "{err}");
+    std::fs::create_dir_all(&out).unwrap();
+    let (code, err) = run(&["batch", "status", s(&out)]);
+    assert_eq!(code, Some(2));
     assert!(err.contains("no batch.json"), "{err}");
 }
 
