@@ -239,13 +239,18 @@ fn the_glb_validates_and_the_report_plays_offline_in_chromium() {
 }
 
 #[test]
-fn a_folder_that_is_not_a_run_is_exit_2_naming_the_file() {
+fn a_folder_that_is_not_a_run_is_exit_2_saying_what_it_is() {
     let tmp = tempfile::tempdir().unwrap();
     let o = visage(&["export", s(tmp.path())]);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("camera.json"), "{err}");
+    assert!(
+        err.contains("not a visage run folder") && err.contains("metrics.json"),
+        "{err}"
+    );
     let missing: PathBuf = tmp.path().join("nothing_here");
     let o = visage(&["export", s(&missing)]);
     assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("nothing_here: no such folder"), "{err}");
 }
