@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{inputs, json, run_ok, s, visage};
+use common::{inputs, json, run_ok, s, spawn_until, visage};
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -28,24 +28,6 @@ fn run_five_frames(clip: &Path, models: &Path, out: &Path, extra: &[&str]) {
     ];
     args.extend(extra);
     run_ok(&args);
-}
-
-/// Starts `visage ARGS…` and returns it once `marker` exists (failing after two minutes).
-fn spawn_until(args: &[&str], marker: &Path, stderr: std::process::Stdio) -> std::process::Child {
-    let child = Command::new(env!("CARGO_BIN_EXE_visage"))
-        .args(args)
-        .stderr(stderr)
-        .spawn()
-        .unwrap();
-    let started = std::time::Instant::now();
-    while !marker.exists() {
-        assert!(
-            started.elapsed().as_secs() < 120,
-            "no {marker:?} after two minutes"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(10));
-    }
-    child
 }
 
 fn ply_count(dir: &Path) -> usize {

@@ -114,21 +114,15 @@ fn a_second_run_into_the_same_folder_is_refused_naming_the_first() {
         args.extend_from_slice(extra);
         args.iter().map(|a| a.to_string()).collect::<Vec<_>>()
     };
-    let mut first = Command::new(env!("CARGO_BIN_EXE_visage"))
-        .args(run(&["--ply"]))
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
+    // Started, it holds the folder; wait until it has written a frame.
+    let args = run(&["--ply"]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let mut first = common::spawn_until(
+        &args,
+        &out.join("meshes/000002.ply"),
+        std::process::Stdio::null(),
+    );
     let pid = format!("pid {}", first.id());
-    // Wait until the first run holds the folder and has written a frame.
-    let started = std::time::Instant::now();
-    while !out.join("meshes/000002.ply").exists() {
-        assert!(
-            started.elapsed().as_secs() < 120,
-            "the first run wrote no frame"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(10));
-    }
     for extra in [&[][..], &["--overwrite"]] {
         let args = run(extra);
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
@@ -229,16 +223,12 @@ fn a_killed_run_resumes_to_a_folder_whose_files_agree() {
         a.extend_from_slice(extra);
         a.iter().map(|x| x.to_string()).collect::<Vec<_>>()
     };
-    let mut child = Command::new(env!("CARGO_BIN_EXE_visage"))
-        .args(args(&[]))
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let started = std::time::Instant::now();
-    while !out.join("meshes/000012.ply").exists() {
-        assert!(started.elapsed().as_secs() < 120, "the run wrote no frame");
-        std::thread::sleep(std::time::Duration::from_millis(10));
-    }
+    let a = args(&[]);
+    let mut child = common::spawn_until(
+        &a.iter().map(String::as_str).collect::<Vec<_>>(),
+        &out.join("meshes/000012.ply"),
+        std::process::Stdio::null(),
+    );
     child.kill().unwrap();
     child.wait().unwrap();
     let held = std::fs::read_dir(out.join("meshes")).unwrap().count();

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
 
 /// Runs `visage ARGS…` and returns its output.
 pub fn visage(args: &[&str]) -> Output {
@@ -43,4 +43,22 @@ pub fn inputs() -> (PathBuf, PathBuf) {
 /// A JSON file's contents.
 pub fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// Starts `visage ARGS…` and returns it once `marker` exists (failing after two minutes).
+pub fn spawn_until(args: &[&str], marker: &Path, stderr: Stdio) -> Child {
+    let child = Command::new(env!("CARGO_BIN_EXE_visage"))
+        .args(args)
+        .stderr(stderr)
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while !marker.exists() {
+        assert!(
+            started.elapsed().as_secs() < 120,
+            "no {marker:?} after two minutes"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    child
 }
