@@ -8,14 +8,16 @@ use std::sync::Arc;
 /// Exit code of a run stopped by Ctrl-C or SIGTERM (128 + SIGINT, as shells report it).
 pub const INTERRUPTED: u8 = 130;
 
-/// Installs the handler; the flag turns true on the first signal.
-pub fn install() -> Arc<AtomicBool> {
+/// Installs the handler; the flag turns true on the first signal. A second signal ends the
+/// process at once, saying so and what `after_second` tells of the files left.
+pub fn install(after_second: &str) -> Arc<AtomicBool> {
     let flag = Arc::new(AtomicBool::new(false));
     let seen = flag.clone();
+    let message = format!("error: stopped at once by a second Ctrl-C: {after_second}\n");
     let installed = ctrlc::set_handler(move || {
         if seen.swap(true, Ordering::SeqCst) {
-            // The second signal: clear the progress bar's line and go.
-            let _ = write!(std::io::stderr(), "\r\x1b[2K");
+            // Clear the progress bar's line first.
+            let _ = write!(std::io::stderr(), "\r\x1b[2K{message}");
             std::process::exit(i32::from(INTERRUPTED));
         }
     });

@@ -324,7 +324,7 @@ const OTHER_TESTS: &[(&str, &str)] = &[
     ),
     (
         "a full disk during a run",
-        "run_cli::a_full_disk_stops_the_run_naming_the_file_and_resume_goes_on",
+        "run_cli::a_full_disk_names_the_first_failed_write_and_the_frames_resume",
     ),
     (
         "`--resume` with other options than the run it continues",

@@ -410,11 +410,7 @@ fn ctrl_c_stops_after_a_frame_and_keeps_the_work() {
         &out.join("meshes/000003.ply"),
         std::process::Stdio::piped(),
     );
-    let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
+    interrupt(&child);
     let o = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(130), "{err}");
@@ -505,6 +501,64 @@ fn assert_whole_run_without_plys(out: &Path, frames: usize) {
     assert_eq!(indices(&metrics), all, "metrics.json's frames");
     assert!(out.join("identity.json").is_file());
     assert!(tmp_files(out).is_empty(), "{:?}", tmp_files(out));
+}
+
+/// Sends SIGINT to `child`.
+fn interrupt(child: &std::process::Child) {
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+}
+
+/// Ctrl-C in clip mode: the message does not advise `--resume`, which a clip-mode run cannot
+/// do, and says why; a second Ctrl-C stops at once and says so, and what it left.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn ctrl_c_says_what_the_run_can_do_next_and_a_second_one_is_not_silent() {
+    let (models, clip) = inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("clip");
+    let args = ["run", s(&clip), "--out", s(&out), "--models", s(&models)];
+    let child = spawn_until(
+        &[&args[..], &["--mode", "clip"]].concat(),
+        &out.join("metrics.json"),
+        std::process::Stdio::piped(),
+    );
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    interrupt(&child);
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(
+        err.contains("interrupted after")
+            && err.contains("cannot be resumed: a clip-mode run")
+            && !err.contains("--resume goes on"),
+        "{err}"
+    );
+
+    let out = tmp.path().join("twice");
+    let args = ["run", s(&clip), "--out", s(&out), "--models", s(&models)];
+    let child = spawn_until(
+        &args,
+        &out.join("metrics.json"),
+        std::process::Stdio::piped(),
+    );
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    interrupt(&child);
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    interrupt(&child);
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(
+        err.contains("stopped at once by a second Ctrl-C") && err.contains("--resume"),
+        "{err}"
+    );
 }
 
 /// SIGKILL part-way, then `--resume`: the files are cut back to the last frame they all hold
@@ -640,9 +694,10 @@ fn a_killed_run_leaves_complete_files_and_a_rerun_must_choose() {
     assert!(err.contains("\"complete\" over 5 frames"), "{err}");
 }
 
-/// A full disk, here a file-size limit (writes past it fail as they do on a full disk): the
-/// run stops with exit 2 naming the file, metrics.json says "failed" with the cause, and
-/// `--resume` goes on once there is room.
+/// A write that fails part-way, here past a file-size limit: the run stops with exit 2 naming
+/// the file, metrics.json says "failed" with the cause, no streamed file appears under its
+/// final name (each may end inside a record), and `--resume` goes on once there is room, to
+/// the files an uninterrupted run writes.
 #[test]
 #[cfg_attr(
     not(all(shared_data, model_files, ffmpeg)),
@@ -682,6 +737,13 @@ fn a_full_disk_stops_the_run_naming_the_file_and_resume_goes_on() {
     assert!(m["error"].as_str().unwrap().contains("too large"), "{m}");
     let frames = m["frames"].as_array().unwrap().len();
     assert!((2..40).contains(&frames), "{frames} frames");
+    assert!(
+        err.contains("temporary names") && err.contains("--resume"),
+        "{err}"
+    );
+    for name in STREAMED {
+        assert!(!out.join(name).exists(), "{name} under its final name");
+    }
 
     let resume = [&args[..], &["--resume"]].concat();
     let o = visage(&resume);
@@ -692,6 +754,108 @@ fn a_full_disk_stops_the_run_naming_the_file_and_resume_goes_on() {
         "failed"
     );
     assert_whole_run_without_plys(&out, 40);
+    let whole = tmp.path().join("whole");
+    run_ok(&[&args[..2], &["--out", s(&whole)], &args[4..], &["--quiet"]].concat());
+    for name in ["sequence.pc2", "blendshapes.csv"] {
+        assert!(
+            std::fs::read(out.join(name)).unwrap() == std::fs::read(whole.join(name)).unwrap(),
+            "{name} differs from the uninterrupted run's"
+        );
+    }
+}
+
+/// The files a run streams frame by frame.
+const STREAMED: [&str; 4] = [
+    "sequence.pc2",
+    "landmarks.json",
+    "blendshapes.csv",
+    "blendshapes.json",
+];
+
+/// A really full disk (a 600 KiB tmpfs, in a mount namespace of its own: needs root): the
+/// message names the write that failed first — not metrics.json, which cannot be written
+/// either and is said to be so —, nothing streamed is under a final name, and the folder,
+/// moved where there is room, resumes to an uninterrupted run's files.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_full_disk_names_the_first_failed_write_and_the_frames_resume() {
+    let (models, clip) = inputs();
+    let namespaces = Command::new("unshare").args(["-m", "true"]).output();
+    if !namespaces.is_ok_and(|o| o.status.success()) {
+        // Without root a tmpfs cannot be mounted; the test above covers the failing write.
+        let root = std::env::var("USER").is_ok_and(|u| u == "root");
+        assert!(
+            !(root && std::env::var("CI").is_ok_and(|v| v == "true")),
+            "unshare -m failed as root under CI"
+        );
+        eprintln!("skipped: cannot make a mount namespace (needs root)");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let (disk, moved) = (tmp.path().join("disk"), tmp.path().join("moved"));
+    std::fs::create_dir(&disk).unwrap();
+    let args = ["--max-frames", "40", "--models", s(&models)];
+    let o = Command::new("unshare")
+        .args(["-m", "bash", "-c"])
+        .arg(
+            "disk=$1; moved=$2; shift 2; mount -t tmpfs -o size=600k tmpfs \"$disk\" || exit 99; \
+             \"$@\"; code=$?; cp -a \"$disk/r\" \"$moved\"; exit $code",
+        )
+        .args([
+            "sh",
+            s(&disk),
+            s(&moved),
+            env!("CARGO_BIN_EXE_visage"),
+            "run",
+        ])
+        .arg(&clip)
+        .args(["--out", &format!("{}/r", s(&disk))])
+        .args(args)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_ne!(o.status.code(), Some(99), "cannot mount a tmpfs: {err}");
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("No space left on device"), "{err}");
+    assert!(
+        err.contains("metrics.json could not be written either"),
+        "{err}"
+    );
+    let first = err.trim_end().rsplit("cannot write ").next().unwrap();
+    assert!(
+        !first.contains("metrics.json"),
+        "the first failure: {first}"
+    );
+    for name in STREAMED {
+        assert!(!moved.join(name).exists(), "{name} under its final name");
+    }
+    // `cp -a` above kept the folder as the full disk left it.
+    let resume = [
+        &["run", s(&clip), "--out", s(&moved)][..],
+        &args,
+        &["--resume", "--quiet"],
+    ]
+    .concat();
+    run_ok(&resume);
+    assert_whole_run_without_plys(&moved, 40);
+    let whole = tmp.path().join("whole");
+    run_ok(
+        &[
+            &["run", s(&clip), "--out", s(&whole)][..],
+            &args,
+            &["--quiet"],
+        ]
+        .concat(),
+    );
+    for name in ["sequence.pc2", "blendshapes.csv"] {
+        assert!(
+            std::fs::read(moved.join(name)).unwrap() == std::fs::read(whole.join(name)).unwrap(),
+            "{name} differs from the uninterrupted run's"
+        );
+    }
 }
 
 /// Two portraits side by side: `--faces largest` meshes one and warns about the other;
@@ -753,4 +917,43 @@ fn every_face_gets_its_own_folder_with_faces_all() {
     }
     let (left, right) = (nose_x(&out.join("face-1")), nose_x(&out.join("face-2")));
     assert!(left < 300.0 && right > 320.0, "{left} {right}");
+
+    // Interrupted while the first face runs: faces.json says what that face's metrics say.
+    let folder = tmp.path().join("frames");
+    std::fs::create_dir(&folder).unwrap();
+    for i in 0..150 {
+        std::fs::copy(&input, folder.join(format!("{i:04}.png"))).unwrap();
+    }
+    let out = tmp.path().join("stopped");
+    let child = spawn_until(
+        &[
+            "run",
+            s(&folder),
+            "--out",
+            s(&out),
+            "--faces",
+            "all",
+            "--models",
+            s(&models),
+        ],
+        &out.join("face-1/metrics.json"),
+        std::process::Stdio::piped(),
+    );
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    interrupt(&child);
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let face = &json(&out.join("faces.json"))["faces"][0];
+    assert_eq!(face["status"], "interrupted");
+    assert_eq!(
+        json(&out.join("face-1/metrics.json"))["status"],
+        "interrupted"
+    );
+    let meshed = face["frames_meshed"].as_u64().unwrap();
+    assert!((1..150).contains(&meshed), "{meshed}");
 }

@@ -96,6 +96,12 @@ impl BlendshapesJsonWriter {
     pub fn finish(self) -> Result<PathBuf, Error> {
         self.stream.finish(b"]}\n")
     }
+
+    /// Completes the file under its temporary name ([`crate::stream::Completed`]), to be renamed
+    /// or taken back together with the run's other files.
+    pub(crate) fn complete(self) -> Result<crate::stream::Completed, Error> {
+        self.stream.complete(b"]}\n")
+    }
 }
 #[cfg(test)]
 mod tests {

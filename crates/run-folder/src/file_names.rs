@@ -4,6 +4,9 @@
 
 /// The point cache: the fused surface per frame (`visage run`).
 pub const POINT_CACHE: &str = "sequence.pc2";
+/// The point cache with every frame filled, while it is being written (the frames without a
+/// mesh hold the nearest earlier one); renamed to [`POINT_CACHE`] when the run finishes.
+pub const POINT_CACHE_FILLED: &str = "sequence.pc2.filled.tmp";
 /// The point cache's mesh: the fixed topology with UVs.
 pub const CACHE_MESH: &str = "mesh.obj";
 /// The point cache's material.

@@ -313,6 +313,12 @@ impl LiveLinkCsvWriter {
     pub fn finish(self) -> Result<PathBuf, Error> {
         self.stream.finish(b"")
     }
+
+    /// Completes the file under its temporary name ([`crate::stream::Completed`]), to be renamed
+    /// or taken back together with the run's other files.
+    pub(crate) fn complete(self) -> Result<crate::stream::Completed, Error> {
+        self.stream.complete(b"")
+    }
 }
 
 #[cfg(test)]

@@ -24,6 +24,7 @@ use crate::file_names;
 use crate::landmarks::LandmarksFrame;
 use crate::live_link_csv::LiveLinkCsvWriter;
 use crate::resume_point::{ResumePoint, RunDescription, RunParameters};
+use crate::stream::{Completed, Stream};
 use crate::RunFolderError as Error;
 
 /// An output folder being written.
@@ -43,6 +44,9 @@ pub struct OutputDir {
     y_up: Vec<[f64; 3]>,
     /// A resumed run: the streamed files continue from here ([`OutputDir::resuming`]).
     resume: Option<ResumePoint>,
+    /// Whether a frame's write failed: the streams may end inside a record, so
+    /// [`OutputDir::finish`] leaves them under their temporary names.
+    failed: bool,
 }
 
 /// `sequence.pc2` being written: one sample per meshed frame as they come; frames without a
@@ -89,6 +93,7 @@ impl OutputDir {
             frames: Vec::new(),
             y_up: Vec::new(),
             resume: None,
+            failed: false,
         })
     }
 
@@ -261,36 +266,76 @@ impl OutputDir {
         write_json_atomically(&self.dir.join(file_names::METRICS), report)
     }
 
-    /// Closes `landmarks.json` and the blendshape files (also after a failed run: they then
-    /// hold the frames so far).
-    ///
-    /// # Errors
-    /// The first file that could not be finished; the others are finished all the same, and a
-    /// file that could not be stays under its temporary name (`visage run --resume` reads it).
-    pub fn finish(&mut self) -> Result<(), Error> {
-        let mut results = vec![self.finish_point_cache()];
-        if let Some((csv, json)) = self.blendshapes.take() {
-            results.push(csv.finish().map(drop));
-            results.push(json.finish().map(drop));
-        }
-        results.push(self.finish_landmarks());
-        results.into_iter().collect()
+    /// Whether a frame's write failed (the streams then stay under their temporary names).
+    pub fn write_failed(&self) -> bool {
+        self.failed
     }
 
-    fn finish_landmarks(&mut self) -> Result<(), Error> {
-        let Some((mut w, _)) = self.landmarks.take() else {
+    /// The frames the files hold: every frame whose landmarks record was written (with a
+    /// resumed run's kept frames).
+    pub fn frames_written(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// Finishes the streamed files — the point cache, `landmarks.json` and the blendshape
+    /// files — all or none: each is written to its end under its temporary name, and only when
+    /// every one is are they renamed to their final names. After a failed frame write, or when
+    /// one cannot be finished (a full disk), every file stays under its temporary name with
+    /// the frames it held, and `visage run --resume` goes on from there.
+    ///
+    /// # Errors
+    /// The first file that could not be finished (the run's earlier write error is its own).
+    pub fn finish(&mut self) -> Result<(), Error> {
+        if self.failed {
             return Ok(());
+        }
+        let mut completed = Vec::new();
+        let mut first_error = None;
+        let mut note = |result: Result<Option<Completed>, Error>| match result {
+            Ok(done) => completed.extend(done),
+            Err(e) => {
+                first_error.get_or_insert(e);
+            }
+        };
+        note(self.complete_landmarks());
+        if let Some((csv, json)) = self.blendshapes.take() {
+            note(csv.complete().map(Some));
+            note(json.complete().map(Some));
+        }
+        let cache = self.complete_point_cache();
+        if let Some(e) = first_error {
+            for c in completed {
+                let _ = c.withdraw();
+            }
+            if let Ok(Some(filled)) = cache {
+                filled.withdraw();
+            }
+            return Err(e);
+        }
+        let cache = match cache {
+            Ok(cache) => cache,
+            Err(e) => {
+                for c in completed {
+                    let _ = c.withdraw();
+                }
+                return Err(e);
+            }
+        };
+        if let Some(filled) = cache {
+            filled.publish()?;
+        }
+        for c in completed {
+            c.publish()?;
+        }
+        Ok(())
+    }
+
+    fn complete_landmarks(&mut self) -> Result<Option<Completed>, Error> {
+        let Some((w, _)) = self.landmarks.take() else {
+            return Ok(None);
         };
         let path = self.dir.join(file_names::LANDMARKS);
-        let tmp = tmp_path(&path);
-        w.write_all(b"]}\n")
-            .and_then(|()| w.flush())
-            .map_err(|source| Error::Write {
-                path: tmp.clone(),
-                source,
-            })?;
-        drop(w);
-        std::fs::rename(&tmp, &path).map_err(|source| Error::Write { path, source })
+        Stream::from_writer(&path, w).complete(b"]}\n").map(Some)
     }
 }
 
@@ -343,25 +388,36 @@ impl OutputDir {
         Ok(())
     }
 
-    /// Closes the point cache: fills the frames without a mesh (every processed frame has a
-    /// landmarks record) and renames it into place.
-    fn finish_point_cache(&mut self) -> Result<(), Error> {
+    /// Completes the point cache: its header's sample count, and when some frames have no
+    /// mesh (every processed frame has a landmarks record), a copy with every frame filled
+    /// (`sequence.pc2.filled.tmp`), the unfilled one staying for a resume until the copy is
+    /// renamed into place.
+    fn complete_point_cache(&mut self) -> Result<Option<FilledCache>, Error> {
         let PointCacheState::Writing { writer, meshed } =
             std::mem::replace(&mut self.cache, PointCacheState::Off)
         else {
-            return Ok(());
+            return Ok(None);
         };
         let path = self.dir.join(file_names::POINT_CACHE);
         let tmp = tmp_path(&path);
-        let mesh_error = |source: MeshIoError| Error::WriteMesh {
-            path: tmp.clone(),
-            source,
+        let mesh_error = |path: &Path| {
+            let path = path.to_owned();
+            move |source: MeshIoError| Error::WriteMesh { path, source }
         };
-        writer.finish().map_err(mesh_error)?;
+        writer.finish().map_err(mesh_error(&tmp))?;
         let frames = &self.frames;
-        if !frames.is_empty() && *frames != meshed {
-            let cache = read_pc2(&tmp).map_err(mesh_error)?;
-            let mut filled = Pc2Writer::create(&tmp, cache.points, 0.0).map_err(mesh_error)?;
+        if frames.is_empty() || *frames == meshed {
+            return Ok(Some(FilledCache {
+                source: tmp.clone(),
+                unfilled: tmp,
+                path,
+            }));
+        }
+        let filled_path = self.dir.join(file_names::POINT_CACHE_FILLED);
+        let fill = || {
+            let cache = read_pc2(&tmp).map_err(mesh_error(&tmp))?;
+            let mut filled = Pc2Writer::create(&filled_path, cache.points, 0.0)
+                .map_err(mesh_error(&filled_path))?;
             let mut sample = 0;
             let mut points = vec![[0.0; 3]; cache.points];
             for &index in frames {
@@ -371,11 +427,47 @@ impl OutputDir {
                 for (p, c) in points.iter_mut().zip(cache.sample(sample).chunks_exact(3)) {
                     *p = [c[0] as f64, c[1] as f64, c[2] as f64];
                 }
-                filled.push(&points).map_err(mesh_error)?;
+                filled.push(&points).map_err(mesh_error(&filled_path))?;
             }
-            filled.finish().map_err(mesh_error)?;
+            filled.finish().map_err(mesh_error(&filled_path))
+        };
+        if let Err(e) = fill() {
+            let _ = std::fs::remove_file(&filled_path);
+            return Err(e);
         }
-        std::fs::rename(&tmp, &path).map_err(|source| Error::Write { path, source })
+        Ok(Some(FilledCache {
+            source: filled_path,
+            unfilled: tmp,
+            path,
+        }))
+    }
+}
+
+/// The point cache written to its end, not yet in place: `source` (the unfilled temporary
+/// cache, or its filled copy) becomes `path`.
+struct FilledCache {
+    source: PathBuf,
+    unfilled: PathBuf,
+    path: PathBuf,
+}
+
+impl FilledCache {
+    fn publish(self) -> Result<(), Error> {
+        std::fs::rename(&self.source, &self.path).map_err(|source| Error::Write {
+            path: self.path.clone(),
+            source,
+        })?;
+        if self.source != self.unfilled {
+            let _ = std::fs::remove_file(&self.unfilled);
+        }
+        Ok(())
+    }
+
+    /// Leaves the unfilled temporary cache, for a resume.
+    fn withdraw(self) {
+        if self.source != self.unfilled {
+            let _ = std::fs::remove_file(&self.source);
+        }
     }
 }
 
@@ -406,6 +498,12 @@ pub struct MeshOutput<'a> {
 impl OutputDir {
     /// Appends a frame's landmarks record, after flushing every other stream.
     pub fn write_landmarks(&mut self, record: &LandmarksFrame) -> Result<(), Error> {
+        let result = self.write_landmarks_unchecked(record);
+        self.failed |= result.is_err();
+        result
+    }
+
+    fn write_landmarks_unchecked(&mut self, record: &LandmarksFrame) -> Result<(), Error> {
         if self.written_before(record.index) {
             return Ok(());
         }
@@ -431,6 +529,12 @@ impl OutputDir {
 
     /// Appends a frame's blendshapes to the CSV and the JSON.
     pub fn write_blendshapes(&mut self, frame: &BlendshapeFrame) -> Result<(), Error> {
+        let result = self.write_blendshapes_unchecked(frame);
+        self.failed |= result.is_err();
+        result
+    }
+
+    fn write_blendshapes_unchecked(&mut self, frame: &BlendshapeFrame) -> Result<(), Error> {
         if self.written_before(frame.index) {
             return Ok(());
         }
@@ -443,6 +547,12 @@ impl OutputDir {
 
     /// Appends a meshed frame's fused surface to the point cache and writes its PLYs.
     pub fn write_mesh(&mut self, frame: &MeshOutput<'_>) -> Result<(), Error> {
+        let result = self.write_mesh_unchecked(frame);
+        self.failed |= result.is_err();
+        result
+    }
+
+    fn write_mesh_unchecked(&mut self, frame: &MeshOutput<'_>) -> Result<(), Error> {
         if self.written_before(frame.index) {
             return Ok(());
         }

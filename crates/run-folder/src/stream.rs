@@ -44,6 +44,15 @@ impl Stream {
         Ok(Stream::new(path, tmp, file))
     }
 
+    /// A stream over `path`'s temporary sibling, already open as `out`.
+    pub(crate) fn from_writer(path: &Path, out: BufWriter<File>) -> Stream {
+        Stream {
+            path: path.to_owned(),
+            tmp: tmp_path(path),
+            out,
+        }
+    }
+
     fn new(path: &Path, tmp: PathBuf, file: File) -> Stream {
         Stream {
             path: path.to_owned(),
@@ -80,24 +89,37 @@ impl Stream {
 
     /// Writes `tail`, flushes, and renames the file to its final name, which it returns; on
     /// failure the temporary file stays (with what it holds).
-    pub(crate) fn finish(mut self, tail: &[u8]) -> Result<PathBuf, Error> {
-        let (tmp, path) = (self.tmp, self.path);
-        let result = self
+    pub(crate) fn finish(self, tail: &[u8]) -> Result<PathBuf, Error> {
+        self.complete(tail)?.publish()
+    }
+
+    /// Writes `tail` and hands everything to the operating system, still under the temporary
+    /// name: [`Completed::publish`] renames it, [`Completed::withdraw`] takes the tail off again
+    /// (a run whose other files could not be finished stays resumable). When the tail cannot
+    /// be written it is taken off at once and the file holds what it held before.
+    pub(crate) fn complete(mut self, tail: &[u8]) -> Result<Completed, Error> {
+        let body = self
             .out
-            .write_all(tail)
-            .and_then(|()| self.out.into_inner().map_err(|e| e.into_error()))
-            .map_err(|source| Error::Write {
-                path: tmp.clone(),
+            .flush()
+            .and_then(|()| self.out.get_ref().metadata())
+            .map(|m| m.len())
+            .map_err(|source| self.io_error(source))?;
+        let completed = Completed {
+            path: self.path.clone(),
+            tmp: self.tmp.clone(),
+            body,
+        };
+        let written = self.out.write_all(tail).and_then(|()| self.out.flush());
+        if let Err(source) = written {
+            // The tail's bytes that reached the file come off; the buffer's are dropped.
+            let (file, _) = self.out.into_parts();
+            let _ = file.set_len(body);
+            return Err(Error::Write {
+                path: completed.tmp,
                 source,
-            })
-            .and_then(|file| {
-                drop(file);
-                std::fs::rename(&tmp, &path).map_err(|source| Error::Write {
-                    path: path.clone(),
-                    source,
-                })
             });
-        result.map(|()| path)
+        }
+        Ok(completed)
     }
 
     /// A failure to write the temporary file.
@@ -106,6 +128,39 @@ impl Stream {
             path: self.tmp.clone(),
             source,
         }
+    }
+}
+
+/// A streamed file written to its end under its temporary name, not yet renamed.
+#[derive(Debug)]
+pub(crate) struct Completed {
+    path: PathBuf,
+    tmp: PathBuf,
+    /// The file's length before its tail.
+    body: u64,
+}
+
+impl Completed {
+    /// Renames the file to its final name, which it returns.
+    pub(crate) fn publish(self) -> Result<PathBuf, Error> {
+        std::fs::rename(&self.tmp, &self.path).map_err(|source| Error::Write {
+            path: self.path.clone(),
+            source,
+        })?;
+        Ok(self.path)
+    }
+
+    /// Takes the tail off again, leaving the temporary file as it was before
+    /// [`Stream::complete`] (a shorter file always fits on the disk).
+    pub(crate) fn withdraw(self) -> Result<(), Error> {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(&self.tmp)
+            .and_then(|f| f.set_len(self.body))
+            .map_err(|source| Error::Write {
+                path: self.tmp,
+                source,
+            })
     }
 }
 

@@ -58,8 +58,17 @@ pub struct FolderRun {
     /// Where a resumed run continued.
     pub resumed: Option<ResumePoint>,
     /// Why the run stopped early — [`Error::Interrupted`], [`Error::NoFace`] or another
-    /// error —; the frames before it are written, and `metrics.json` says so.
+    /// error —; the frames before it are written, and `metrics.json` says so. The first thing
+    /// that went wrong: a later failure to write `metrics.json` is [`FolderRun::metrics_error`].
     pub error: Option<Error>,
+    /// Frames the folder's files hold (a resumed run's kept frames included).
+    pub kept: usize,
+    /// Whether the streamed files are under their final names; `false` after a write failed
+    /// (they stay `.tmp`, where `--resume` finds them).
+    pub finished: bool,
+    /// Why `metrics.json` could not be written after the run's error (it then still says
+    /// `"running"`, as after a kill, and `--resume` goes on all the same).
+    pub metrics_error: Option<Error>,
 }
 
 /// Runs `input` through `reconstructor` into the folder `dir` (created if missing), streaming
@@ -102,6 +111,9 @@ pub fn run_into(
                 summary: None,
                 resumed: None,
                 error: None,
+                kept: frames,
+                finished: true,
+                metrics_error: None,
             });
         }
         ResumeState::Continue(point) => {
@@ -170,9 +182,13 @@ pub fn run_into(
     if outcome.error.is_none() && s.frames > 0 && s.solved + s.carried == 0 {
         outcome.error = Some(Error::NoFace { frames: s.frames });
     }
-    if let (Err(e), None) = (out.finish(), &outcome.error) {
-        outcome.error = Some(e.into());
-    }
+    let finished = match out.finish() {
+        Ok(()) => outcome.error.is_none() || !out.write_failed(),
+        Err(e) => {
+            outcome.error.get_or_insert(e.into());
+            false
+        }
+    };
     if let Some(identity) = &outcome.identity {
         // A failure here still leaves a metrics.json that says so.
         let written = out.write_identity(
@@ -231,8 +247,17 @@ pub fn run_into(
         });
         frames.splice(0..0, kept.collect::<Vec<_>>());
     }
-    out.write_metrics(&metrics)?;
+    let mut metrics_error = None;
+    if let Err(e) = out.write_metrics(&metrics) {
+        match outcome.error {
+            None => outcome.error = Some(e.into()),
+            Some(_) => metrics_error = Some(e.into()),
+        }
+    }
     Ok(FolderRun {
+        kept: out.frames_written(),
+        finished,
+        metrics_error,
         meshed: earlier_meshed + outcome.summary.solved + outcome.summary.carried,
         frames: outcome.frames.len(),
         summary: Some(outcome.summary),

@@ -117,7 +117,10 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
             n => format!("; removed {n} unfinished folder(s) a killed worker left"),
         }
     );
-    let stop = interrupt::install();
+    let stop = interrupt::install(
+        "the clip being processed stays in the batch folder's .partial/ and is run again by the \
+         next worker; finished clips are kept",
+    );
     let summary = batch.run(&VisageRun, &stop, |line| eprintln!("visage batch: {line}"));
     println!("{}", summary.json_line());
     if summary.interrupted {

@@ -28,7 +28,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let (input, reconstructor) = p.open()?;
     let bar = p.progress(&input);
     // Ctrl-C ends the input; the figures cover the frames so far.
-    let input = input.stop_on(crate::interrupt::install());
+    let input = input.stop_on(crate::interrupt::install("no figures were printed"));
     let outcome = reconstructor.run(input, &mut terminal(&bar));
     bar.finish_and_clear();
     if let Some(e) = outcome.error {

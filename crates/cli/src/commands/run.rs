@@ -509,7 +509,14 @@ pub fn terminal(bar: &ProgressBar) -> impl FrameSink {
 
 /// Runs `visage run`.
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
-    run_with_stop(args, &interrupt::install())
+    let left = format!(
+        "the files in {} keep the frames written so far, under temporary names ({}) where \
+         unfinished; metrics.json says \"running\", and the same command with --resume goes on \
+         after the last frame every file holds",
+        args.out.display(),
+        file_names::TMP_SUFFIX
+    );
+    run_with_stop(args, &interrupt::install(&left))
 }
 
 /// [`run`] that stops when `stop` turns true (Ctrl-C's flag, installed once per process).
@@ -556,8 +563,8 @@ pub fn run_with_stop(
         let dir = args.out.join(&folder);
         let result = run_face(&args, &dir, FaceTarget::Near(*bbox), stop);
         let (status, meshed) = match &result {
-            Ok(meshed) => ("complete", *meshed),
-            Err(_) => ("failed", 0),
+            Ok(meshed) => ("complete".to_owned(), *meshed),
+            Err(_) => ended_as(&dir),
         };
         records.push(serde_json::json!({
             "id": id,
@@ -582,6 +589,21 @@ pub fn run_with_stop(
         &serde_json::json!({ "input": p.input_path().display().to_string(), "faces": records }),
     )?;
     first_error.map_or(Ok(()), Err)
+}
+
+/// How the run in `dir` ended, as its metrics.json says (`"failed"` when it has none): its
+/// status and the frames it meshed.
+fn ended_as(dir: &std::path::Path) -> (String, usize) {
+    let m = std::fs::read(dir.join(file_names::METRICS))
+        .ok()
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+        .unwrap_or_default();
+    let count = |v: &serde_json::Value| v.as_u64().unwrap_or(0) as usize;
+    let meshed = count(&m["summary"]["solved"])
+        + count(&m["summary"]["carried"])
+        + count(&m["resumed"]["meshed"]);
+    let status = m["status"].as_str().unwrap_or("failed").to_owned();
+    (status, meshed)
 }
 
 /// One tracked face's run into `dir` (continued with `--resume`): the frames meshed, or the
@@ -620,6 +642,11 @@ fn run_face(
         bar: ProgressBar::hidden(),
         quiet: p.quiet,
     };
+    // What the closing message advises: going on with --resume, or why this run cannot.
+    let go_on = match visage::run_folder::RunParameters::cannot_resume(reconstructor.parameters()) {
+        None => "the same command with --resume goes on from there".to_owned(),
+        Some(reason) => format!("it cannot be resumed: {reason}"),
+    };
     let run = visage::run_into(input, reconstructor, dir, options, &mut progress);
     progress.bar.finish_and_clear();
     let run = run?;
@@ -632,8 +659,8 @@ fn run_face(
                 code: interrupt::INTERRUPTED,
                 error: anyhow::anyhow!(
                     "interrupted after {} frames: their meshes, {} and {} \
-                     (status \"interrupted\") are in {}; the same command with --resume goes \
-                     on from there, `visage export {}` makes the other files",
+                     (status \"interrupted\") are in {}; `visage export {}` makes the other \
+                     files; {go_on}",
                     run.frames,
                     file_names::LANDMARKS,
                     file_names::METRICS,
@@ -656,12 +683,36 @@ fn run_face(
             .into())
         }
         Some(e) => {
-            return Err(anyhow::Error::new(e).context(format!(
-                "stopped after {} frames (meshes so far and {} are in {})",
-                run.frames,
-                file_names::METRICS,
-                dir.display()
-            )))
+            let kept = if run.finished {
+                format!(
+                    "stopped after {} frames: the files in {} hold {} frame{}",
+                    run.frames,
+                    dir.display(),
+                    run.kept,
+                    if run.kept == 1 { "" } else { "s" },
+                )
+            } else {
+                format!(
+                    "stopped after {} frames: what was written of them stays in {} under \
+                     temporary names ({})",
+                    run.frames,
+                    dir.display(),
+                    file_names::TMP_SUFFIX
+                )
+            };
+            let context = match &run.metrics_error {
+                None => format!(
+                    "{kept}, and {} says \"failed\"; {go_on}",
+                    file_names::METRICS
+                ),
+                Some(m) => format!(
+                    "{kept}, but {} could not be written either ({}); once the cause is \
+                     fixed, the same command with --resume goes on from there",
+                    file_names::METRICS,
+                    with_causes(m)
+                ),
+            };
+            return Err(anyhow::Error::new(e).context(context));
         }
         None => {}
     }
@@ -693,4 +744,12 @@ fn run_face(
         );
     }
     Ok(run.meshed)
+}
+
+/// `error` and its causes, as one line.
+fn with_causes(error: &dyn std::error::Error) -> String {
+    std::iter::successors(Some(error), |e| e.source())
+        .map(|e| e.to_string())
+        .collect::<Vec<_>>()
+        .join(": ")
 }
