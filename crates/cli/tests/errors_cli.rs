@@ -192,6 +192,13 @@ const CASES: &[Case] = &[
         models: false,
     },
     Case {
+        what: "a field of view so wide that the fit puts the face behind the camera",
+        args: &["run", "{dir}/face.png", "--out", "{dir}/o4", "--fov-deg", "160"],
+        exit: 3,
+        says: "face.png: nothing to mesh (metrics.json is in o4): a face was found in 1 of the 1 frames, but its metric fit failed (the metric face fit placed the face behind the camera); the camera's intrinsics (--fov-deg, --intrinsics) are the likely cause",
+        models: true,
+    },
+    Case {
         what: "no face in any frame",
         args: &["run", "{dir}/grey.png", "--out", "{dir}/o3"],
         exit: 3,

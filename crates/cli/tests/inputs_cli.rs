@@ -1,5 +1,6 @@
 //! Inputs as users' machines make them: a phone's portrait photo stored sideways with an EXIF
-//! orientation tag, and an image folder with macOS's `._name` files beside the images.
+//! orientation tag, an image folder with macOS's `._name` files beside the images, and one
+//! whose images are not all one size.
 
 mod common;
 
@@ -91,5 +92,45 @@ fn hidden_files_in_an_image_folder_are_not_frames() {
             .unwrap()
             .len(),
         1
+    );
+}
+
+/// An image folder of mixed sizes: the images before the odd one are meshed and kept, and the
+/// message names the odd image, its size and the first one's (no intrinsics were given, so
+/// it does not speak of intrinsics).
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files)),
+    ignore = "needs ../shared and the model files (scripts/setup.sh)"
+)]
+fn an_image_folder_of_mixed_sizes_keeps_the_images_before_the_odd_one() {
+    let models = visage_testdata::models_dir();
+    let tmp = tempfile::tempdir().unwrap();
+    let folder = tmp.path().join("shots");
+    std::fs::create_dir(&folder).unwrap();
+    let img = portrait();
+    img.save(folder.join("a.png")).unwrap();
+    img.save(folder.join("b.png")).unwrap();
+    image::imageops::resize(&img, 192, 256, image::imageops::FilterType::Triangle)
+        .save(folder.join("c.png"))
+        .unwrap();
+    let out = tmp.path().join("out");
+    let o = visage(&["run", s(&folder), "--out", s(&out), "--models", s(&models)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("c.png: this image is 192×256 but the first one")
+            && err.contains("a.png, is 384×512")
+            && !err.contains("intrinsics"),
+        "{err}"
+    );
+    let m = json(&out.join("metrics.json"));
+    assert_eq!(m["status"], "failed");
+    assert_eq!(m["frames"].as_array().unwrap().len(), 2);
+    assert_eq!(
+        visage_mesh::io::read_pc2(&out.join("sequence.pc2"))
+            .unwrap()
+            .samples(),
+        2
     );
 }

@@ -39,6 +39,9 @@ pub enum FaceError {
     /// An image is too small or otherwise unusable.
     #[error("invalid image: {reason}")]
     Image { reason: String },
+    /// The metric face fit has no valid answer for these landmarks and this camera.
+    #[error("{reason}")]
+    Fit { reason: String },
     /// An option is outside its valid range.
     #[error("invalid option {name} = {value}: {reason}")]
     InvalidOption {

@@ -59,7 +59,7 @@ pub fn fit_face_geometry(
         });
     }
     if points.iter().any(|p| p.iter().any(|v| !v.is_finite())) {
-        return Err(FaceError::Image {
+        return Err(FaceError::Fit {
             reason: "non-finite landmark".into(),
         });
     }
@@ -77,14 +77,14 @@ pub fn fit_face_geometry(
         / n)
         .sqrt();
     if spread.is_nan() || spread < MIN_LANDMARK_SPREAD_PX {
-        return Err(FaceError::Image {
+        return Err(FaceError::Fit {
             reason: format!("degenerate landmarks (spread {spread} px)"),
         });
     }
     // 1. Weighted similarity Procrustes on the basis points: q ≈ σ R m + τ (pixels).
     let (sigma, rotation) = similarity_procrustes(m, &q, &canonical.procrustes_basis);
     if !(sigma.is_finite() && sigma > 0.0) {
-        return Err(FaceError::Image {
+        return Err(FaceError::Fit {
             reason: format!("degenerate landmarks (Procrustes scale {sigma})"),
         });
     }
@@ -166,8 +166,8 @@ pub fn fit_face_geometry(
         .iter()
         .any(|v| !(v[2] > 0.0 && v.iter().all(|c| c.is_finite())))
     {
-        return Err(FaceError::Image {
-            reason: "metric face fit placed the face behind the camera".into(),
+        return Err(FaceError::Fit {
+            reason: "the metric face fit placed the face behind the camera".into(),
         });
     }
     let mut sq = 0.0;

@@ -152,6 +152,10 @@ pub struct FrameMetrics {
     /// face afresh and the temporal terms restarted here.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub cut: bool,
+    /// Why a face that was found got no mesh: its metric fit failed (e.g. intrinsics so wide
+    /// that the fit put the face behind the camera).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fit_error: Option<String>,
     pub ms: StageTimes,
     /// Fraction of the vertices (face mesh) or domain pixels (image mesh) with valid depth.
     pub valid_fraction: f64,
@@ -291,6 +295,7 @@ impl FrameMetrics {
             detector_ran: None,
             faces_seen: None,
             cut: false,
+            fit_error: None,
             ms: StageTimes::default(),
             valid_fraction: 0.0,
             relative_residual: 0.0,

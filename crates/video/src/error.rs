@@ -33,6 +33,18 @@ pub enum VideoError {
     /// file could not be put in place); `reason` carries ffmpeg's own message where it gave one.
     #[error("{}: cannot encode video: {reason}", path.display())]
     Encode { path: PathBuf, reason: String },
+    /// An image of a folder (or list) is not the size of the first: a folder's images are the
+    /// frames of one camera.
+    #[error(
+        "{}: this image is {}×{} but the first one, {}, is {}×{}; a folder's images are the frames of one camera and must be one size (put images of another size in a folder of their own)",
+        path.display(), size.0, size.1, first.display(), first_size.0, first_size.1
+    )]
+    SizeChanged {
+        path: PathBuf,
+        size: (u32, u32),
+        first: PathBuf,
+        first_size: (u32, u32),
+    },
     /// A folder holds no image files.
     #[error("{}: no images (.png, .jpg, .jpeg) in this folder", path.display())]
     EmptyFolder { path: PathBuf },

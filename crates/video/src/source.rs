@@ -94,6 +94,8 @@ pub enum FrameSource {
         next: usize,
         fps: Option<f64>,
         times: Option<Vec<f64>>,
+        /// The first image read and its size, which every other must have.
+        first: Option<(PathBuf, (u32, u32))>,
     },
     /// Frames made by the caller as they are asked for (a renderer, a capture callback), of
     /// `width × height` pixels, `count` of them when known, at `fps` when known
@@ -136,6 +138,7 @@ impl FrameSource {
                 next: 0,
                 fps: None,
                 times: None,
+                first: None,
             });
         }
         if is_image_path(path) {
@@ -144,6 +147,7 @@ impl FrameSource {
                 next: 0,
                 fps: None,
                 times: None,
+                first: None,
             });
         }
         Ok(FrameSource::Video(VideoReader::open(path)?))
@@ -176,6 +180,7 @@ impl FrameSource {
             next: 0,
             fps: fps.filter(|f| f.is_finite() && *f > 0.0),
             times: Some(times),
+            first: None,
         })
     }
 
@@ -232,6 +237,7 @@ impl Iterator for FrameSource {
                 next,
                 fps,
                 times,
+                first,
             } => {
                 let path = paths.get(*next)?;
                 let index = *next;
@@ -240,10 +246,27 @@ impl Iterator for FrameSource {
                     Some(t) => Some(t[index] - t[0]),
                     None => fps.map(|f| index as f64 / f),
                 };
-                Some(read_image(path).map(|f| Frame {
+                let frame = match read_image(path) {
+                    Ok(f) => f,
+                    Err(e) => return Some(Err(e)),
+                };
+                let size = frame.image.dimensions();
+                match first {
+                    None => *first = Some((path.clone(), size)),
+                    Some((first_path, first_size)) if *first_size != size => {
+                        return Some(Err(VideoError::SizeChanged {
+                            path: path.clone(),
+                            size,
+                            first: first_path.clone(),
+                            first_size: *first_size,
+                        }))
+                    }
+                    Some(_) => {}
+                }
+                Some(Ok(Frame {
                     index,
                     timestamp_s,
-                    ..f
+                    ..frame
                 }))
             }
         }

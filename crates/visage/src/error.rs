@@ -50,15 +50,31 @@ pub enum Error {
     /// An input holds nothing to process.
     #[error("{}: {reason}", path.display())]
     Input { path: PathBuf, reason: String },
-    /// No frame of the input showed a face (neither detector found one).
-    #[error("no face was found in any of the {frames} frames")]
-    NoFace { frames: usize },
+    /// No frame of the input got a mesh: neither detector found a face, or (`unfit` frames)
+    /// one was found but its metric fit failed, for `reason`.
+    #[error("{}", no_face_in_words(*frames, *unfit, reason.as_deref()))]
+    NoFace {
+        frames: usize,
+        unfit: usize,
+        reason: Option<String>,
+    },
     /// The run was asked to stop (Ctrl-C, SIGTERM); the frames before it are complete.
     #[error("interrupted")]
     Interrupted,
     /// A stage thread panicked (a bug).
     #[error("internal error: the {0} stage panicked")]
     Panic(&'static str),
+}
+
+/// Why no frame got a mesh, in words.
+fn no_face_in_words(frames: usize, unfit: usize, reason: Option<&str>) -> String {
+    match (unfit, reason) {
+        (0, _) | (_, None) => format!("no face was found in any of the {frames} frames"),
+        (n, Some(reason)) => format!(
+            "a face was found in {n} of the {frames} frames, but its metric fit failed ({reason}); \
+             the camera's intrinsics (--fov-deg, --intrinsics) are the likely cause"
+        ),
+    }
 }
 
 impl Error {

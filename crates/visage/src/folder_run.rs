@@ -180,7 +180,12 @@ pub fn run_into(
         ));
     }
     if outcome.error.is_none() && s.frames > 0 && s.solved + s.carried == 0 {
-        outcome.error = Some(Error::NoFace { frames: s.frames });
+        let unfit = outcome.frames.iter().filter(|f| f.fit_error.is_some());
+        outcome.error = Some(Error::NoFace {
+            frames: s.frames,
+            unfit: unfit.clone().count(),
+            reason: unfit.clone().find_map(|f| f.fit_error.clone()),
+        });
     }
     let finished = match out.finish() {
         Ok(()) => outcome.error.is_none() || !out.write_failed(),

@@ -378,6 +378,7 @@ impl FaceStage {
                     Err(e) => {
                         faces.push(FaceRecord::new(&face, None));
                         warning = Some(format!("{}: no metric fit: {e}", frame.source));
+                        metrics.fit_error = Some(e.to_string());
                         None
                     }
                 }

@@ -685,17 +685,19 @@ fn run_face(
         Some(e) => {
             let kept = if run.finished {
                 format!(
-                    "stopped after {} frames: the files in {} hold {} frame{}",
+                    "stopped after {} frame{}: the files in {} hold {} frame{}",
                     run.frames,
+                    if run.frames == 1 { "" } else { "s" },
                     dir.display(),
                     run.kept,
                     if run.kept == 1 { "" } else { "s" },
                 )
             } else {
                 format!(
-                    "stopped after {} frames: what was written of them stays in {} under \
+                    "stopped after {} frame{}: what was written of them stays in {} under \
                      temporary names ({})",
                     run.frames,
+                    if run.frames == 1 { "" } else { "s" },
                     dir.display(),
                     file_names::TMP_SUFFIX
                 )
