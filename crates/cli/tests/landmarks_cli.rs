@@ -161,3 +161,37 @@ fn landmark_depth_maps_fuse_into_a_metric_face() {
     assert!((0.4..1.2).contains(&median_z), "median depth {median_z} m");
     assert!((0.10..0.25).contains(&width), "face width {width} m");
 }
+
+/// A video that breaks part-way: the frames read before the break are written (the JSON lists
+/// them), and the message names the break and says so.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_video_that_breaks_part_way_keeps_the_frames_before_the_break() {
+    let (models, clip) = common::inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let cut = common::truncated_clip(tmp.path(), &clip);
+    let out = tmp.path().join("landmarks.json");
+    let o = visage(&[
+        "landmarks",
+        s(&cut),
+        "--out",
+        s(&out),
+        "--models",
+        s(&models),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("broke at frame") && err.contains("lists them"),
+        "{err}"
+    );
+    let frames = common::json(&out)["frames"].as_array().unwrap().len();
+    assert!((1..24).contains(&frames), "{frames} frames");
+    assert!(
+        err.contains(&format!("stopped after {frames} frames")),
+        "{err}"
+    );
+}

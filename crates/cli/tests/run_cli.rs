@@ -193,36 +193,7 @@ fn a_missing_input_is_exit_2_naming_it() {
 fn a_truncated_video_keeps_the_readable_frames_and_names_the_break() {
     let (models, clip) = inputs();
     let tmp = tempfile::tempdir().unwrap();
-    // The first 24 frames with the index up front (faststart), cut in the middle of the data.
-    let full = tmp.path().join("full.mp4");
-    let status = std::process::Command::new("ffmpeg")
-        .args([
-            "-v",
-            "error",
-            "-y",
-            "-i",
-            s(&clip),
-            "-frames:v",
-            "24",
-            "-an",
-        ])
-        .args([
-            "-c:v",
-            "libx264",
-            "-g",
-            "4",
-            "-bf",
-            "0",
-            "-movflags",
-            "+faststart",
-        ])
-        .arg(&full)
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let bytes = std::fs::read(&full).unwrap();
-    let cut = tmp.path().join("cut.mp4");
-    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let cut = common::truncated_clip(tmp.path(), &clip);
     let out = tmp.path().join("out");
     let o = visage(&[
         "run",

@@ -61,36 +61,56 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
     let mut frames_json = Vec::new();
     let mut frame_counter = 0usize;
     let mut faces_found = 0usize;
-    for input in &args.inputs {
-        let still = input.is_file() && is_image_path(input);
-        reader.start();
-        let source = FrameSource::open(input)?;
-        for frame in source {
-            let frame = frame?;
-            let (w, h) = frame.image.dimensions();
-            let k = match intrinsics {
-                Some(k) => {
-                    k.check_size(w, h)
-                        .with_context(|| format!("{}: --intrinsics", frame.source))?;
-                    k
+    // A failure part-way (a video that breaks) keeps the frames read before it: they are
+    // written, and the error says so.
+    let mut read_all = || -> anyhow::Result<()> {
+        for input in &args.inputs {
+            let still = input.is_file() && is_image_path(input);
+            reader.start();
+            let source = FrameSource::open(input)?;
+            for frame in source {
+                let frame = frame?;
+                let (w, h) = frame.image.dimensions();
+                let k = match intrinsics {
+                    Some(k) => {
+                        k.check_size(w, h)
+                            .with_context(|| format!("{}: --intrinsics", frame.source))?;
+                        k
+                    }
+                    None => Intrinsics::from_fov(w, h, fov)?,
+                };
+                let faces = reader.read(frame, &k, still)?;
+                for warning in &faces.warnings {
+                    eprintln!("warning: {warning}");
                 }
-                None => Intrinsics::from_fov(w, h, fov)?,
-            };
-            let faces = reader.read(frame, &k, still)?;
-            for warning in &faces.warnings {
-                eprintln!("warning: {warning}");
+                faces_found += faces.record.faces.len();
+                if let Some(dir) = &args.depth_out {
+                    let depth = render_faces_depth(
+                        &faces.geometries,
+                        reader.canonical(),
+                        &k,
+                        DepthKind::Z,
+                    )?;
+                    let path = dir.join(format!("depth_{frame_counter:06}.png"));
+                    write_depth_png(&path, &depth, 1000.0)
+                        .with_context(|| format!("cannot write {}", path.display()))?;
+                }
+                frames_json.push(faces.record);
+                frame_counter += 1;
             }
-            faces_found += faces.record.faces.len();
-            if let Some(dir) = &args.depth_out {
-                let depth =
-                    render_faces_depth(&faces.geometries, reader.canonical(), &k, DepthKind::Z)?;
-                let path = dir.join(format!("depth_{frame_counter:06}.png"));
-                write_depth_png(&path, &depth, 1000.0)
-                    .with_context(|| format!("cannot write {}", path.display()))?;
-            }
-            frames_json.push(faces.record);
-            frame_counter += 1;
         }
+        Ok(())
+    };
+    if let Err(e) = read_all() {
+        write_json(args.out.as_deref(), &json!({ "frames": frames_json }))?;
+        let written = match &args.out {
+            Some(path) => format!("{} lists them", path.display()),
+            None => "standard output got them".to_owned(),
+        };
+        return Err(e.context(format!(
+            "stopped after {frame_counter} frame{} ({written})",
+            if frame_counter == 1 { "" } else { "s" }
+        )));
     }
     let (tracked, detector_runs) = reader.tracking();
     if tracked > 0 {
@@ -117,9 +137,12 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
 fn write_json(out: Option<&Path>, doc: &serde_json::Value) -> anyhow::Result<()> {
     let text = serde_json::to_string(doc)?;
     match out {
-        Some(path) => {
-            std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
-        }
+        Some(path) => Ok(visage::write_atomically(path, |tmp| {
+            std::fs::write(tmp, &text).map_err(|source| visage::run_folder::RunFolderError::Write {
+                path: tmp.to_owned(),
+                source,
+            })
+        })?),
         None => {
             let mut stdout = std::io::stdout().lock();
             writeln!(stdout, "{text}").context("cannot write to standard output")

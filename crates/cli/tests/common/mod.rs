@@ -62,3 +62,29 @@ pub fn spawn_until(args: &[&str], marker: &Path, stderr: Stdio) -> Child {
     }
     child
 }
+
+/// The first 24 frames of `clip` re-encoded with the index up front (faststart) and cut in the
+/// middle of the data, as `DIR/cut.mp4`: a video that breaks part-way (needs FFmpeg).
+pub fn truncated_clip(dir: &Path, clip: &Path) -> PathBuf {
+    let full = dir.join("full.mp4");
+    let status = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i", s(clip), "-frames:v", "24", "-an"])
+        .args([
+            "-c:v",
+            "libx264",
+            "-g",
+            "4",
+            "-bf",
+            "0",
+            "-movflags",
+            "+faststart",
+        ])
+        .arg(&full)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let bytes = std::fs::read(&full).unwrap();
+    let cut = dir.join("cut.mp4");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    cut
+}
