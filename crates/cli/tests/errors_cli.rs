@@ -338,6 +338,10 @@ const OTHER_TESTS: &[(&str, &str)] = &[
         "run_cli::a_killed_run_resumes_where_it_stopped",
     ),
     (
+        "an image-plane mesh too fine for the face",
+        "run_cli::an_image_plane_mesh_too_fine_for_the_face_is_refused_with_the_spacing_that_fits",
+    ),
+    (
         "a video that breaks part-way",
         "run_cli::a_truncated_video_keeps_the_readable_frames_and_names_the_break",
     ),

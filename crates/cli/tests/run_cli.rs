@@ -928,3 +928,42 @@ fn every_face_gets_its_own_folder_with_faces_all() {
     let meshed = face["frames_meshed"].as_u64().unwrap();
     assert!((1..150).contains(&meshed), "{meshed}");
 }
+
+/// `--mesh image --spacing 1` on a large photo: refused before the mesh is built (it used to
+/// grow past 2.4 GB with no limit), naming the spacing that fits; exit 2.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files)),
+    ignore = "needs ../shared and the model files (scripts/setup.sh)"
+)]
+fn an_image_plane_mesh_too_fine_for_the_face_is_refused_with_the_spacing_that_fits() {
+    let models = visage_testdata::models_dir();
+    let portrait =
+        visage_testdata::require(visage_testdata::shared_dir().join("data/images/astronaut.png"));
+    let tmp = tempfile::tempdir().unwrap();
+    let big = tmp.path().join("big.png");
+    let img = image::open(portrait).unwrap().to_rgb8();
+    image::imageops::resize(&img, 3000, 3000, image::imageops::FilterType::Triangle)
+        .save(&big)
+        .unwrap();
+    let out = tmp.path().join("out");
+    let o = visage(&[
+        "run",
+        s(&big),
+        "--out",
+        s(&out),
+        "--mesh",
+        "image",
+        "--spacing",
+        "1",
+        "--models",
+        s(&models),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--spacing 1: the mesh over this face's")
+            && err.contains("more than the 250000 visage meshes; use --spacing 2 or more"),
+        "{err}"
+    );
+}

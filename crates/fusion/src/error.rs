@@ -29,6 +29,20 @@ pub enum FusionError {
     /// A frame lacks an input its design needs.
     #[error("{what}")]
     MissingInput { what: &'static str },
+    /// The image-plane mesh at this spacing would have more vertices than [`MAX_MESH_VERTICES`]
+    /// (memory grows with them, the factorisation faster still).
+    ///
+    /// [`MAX_MESH_VERTICES`]: crate::MAX_MESH_VERTICES
+    #[error(
+        "--spacing {spacing}: the mesh over this face's {pixels} pixels would have about {estimate} vertices, more than the {limit} visage meshes; use --spacing {smallest} or more"
+    )]
+    TooManyVertices {
+        spacing: u32,
+        pixels: usize,
+        estimate: usize,
+        limit: usize,
+        smallest: u32,
+    },
     #[error("invalid option {name} = {value}: {reason}")]
     InvalidOption {
         name: &'static str,

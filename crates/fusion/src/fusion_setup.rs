@@ -26,6 +26,28 @@ pub struct MeshingOptions {
     pub refine_tolerance_m: Option<f64>,
 }
 
+/// The most vertices of an image-plane mesh: a 2000×2000-pixel face at the default spacing
+/// of 4 pixels (the mesh's sparse operators and their factorisation take a few GB there).
+pub const MAX_MESH_VERTICES: usize = 250_000;
+
+/// Refuses a grid of `spacing` pixels over `pixels` pixels that would pass
+/// [`MAX_MESH_VERTICES`], before any memory is reserved for it.
+fn check_vertex_count(pixels: usize, spacing: u32) -> Result<(), FusionError> {
+    let spacing = spacing.max(1);
+    let estimate = pixels / (spacing as usize * spacing as usize);
+    if estimate <= MAX_MESH_VERTICES {
+        return Ok(());
+    }
+    let smallest = (pixels as f64 / MAX_MESH_VERTICES as f64).sqrt().ceil() as u32;
+    Err(FusionError::TooManyVertices {
+        spacing,
+        pixels,
+        estimate,
+        limit: MAX_MESH_VERTICES,
+        smallest,
+    })
+}
+
 impl Default for MeshingOptions {
     fn default() -> Self {
         let s = SamplingOptions::default();
@@ -85,6 +107,7 @@ impl FusionSetup {
         anchors: &[[f64; 2]],
     ) -> Result<Self, FusionError> {
         k.check_size(domain.width, domain.height)?;
+        check_vertex_count(domain.count(), options.spacing)?;
         let sampling = SamplingOptions {
             spacing: options.spacing,
             refine_tolerance: options.refine_tolerance_m,

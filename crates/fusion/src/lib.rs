@@ -31,7 +31,7 @@ pub use anchored_fuser::{
 pub use error::FusionError;
 pub use face_domain::{Anchor, FaceDomain, MAX_SUBDIVISION};
 pub use fused_frame::{FrameStatus, FusedFrame};
-pub use fusion_setup::{FusionSetup, MeshingOptions, INPAINT_SWEEPS};
+pub use fusion_setup::{FusionSetup, MeshingOptions, INPAINT_SWEEPS, MAX_MESH_VERTICES};
 pub use image_plane_fuser::{to_positions, ImagePlaneFuser, DEFAULT_MAX_DEPTH_M};
 pub use sequence_survey::{SequenceSurvey, DOMAIN_MAJORITY};
 pub use solver_bench::{bench_solver, SizeReport, SolverBench, VariantReport};
