@@ -48,7 +48,7 @@ pub use landmark_smoothing::{
 };
 pub use landmarker::{FaceLandmarker, FrameLandmarks};
 pub use roi::Roi;
-pub use shot_cut::{face_jumped, CutDetector, CUT_FACE_JUMP, CUT_PICTURE_CHANGE};
+pub use shot_cut::{face_jumped, CutDetector, CUT_FACE_CHANGE, CUT_FACE_JUMP, CUT_PICTURE_CHANGE};
 pub use tracker::{box_proximity, FaceTarget, FaceTracker, TrackStep};
 pub mod eye_crop;
 pub mod iris;

@@ -263,6 +263,8 @@ impl FaceStage {
                 .as_ref()
                 .is_some_and(|last| face_jumped(last, &tracked_px));
         }
+        // Another person where the last one was (the picture barely changed).
+        cut |= self.cuts.face_cut(&frame.image, &tracked_px);
         metrics.cut = cut;
         // A cut or a lost face ends the smoother's track: its waiting frames complete now.
         if cut || step.face.is_none() {

@@ -134,3 +134,44 @@ fn a_cut_restarts_the_temporal_model_as_a_fresh_run() {
         "jitter² {fused} vs tracked {tracked}"
     );
 }
+
+/// Two people filmed alike — each face cropped to the same place on the same grey
+/// background, so that the whole picture barely changes — is a cut where the second starts:
+/// the face itself changed. The picture alone does not tell (checked), the face does.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn another_person_filmed_alike_is_a_cut() {
+    let video = visage_testdata::shared_dir().join("data/video");
+    let tmp = tempfile::tempdir().unwrap();
+    let both = tmp.path().join("both");
+    std::fs::create_dir_all(&both).unwrap();
+    let place = "scale=300:300,pad=640:480:170:90:gray";
+    extract(
+        &video.join("lp_d18.mp4"),
+        &format!("crop=330:330:81:120,{place}"),
+        &both,
+        "a",
+    );
+    extract(
+        &video.join("lp_d13.mp4"),
+        &format!("crop=550:550:93:362,{place}"),
+        &both,
+        "b",
+    );
+    let frame = |name: &str| image::open(both.join(name)).unwrap().to_rgb8();
+    let mut picture = visage_face::CutDetector::default();
+    assert!(!picture.picture_cut(&frame(&format!("a_{SHOT:03}.png"))));
+    assert!(
+        !picture.picture_cut(&frame("b_001.png")),
+        "the pictures alone differ too little for a cut"
+    );
+    let cut = run(&both);
+    assert_eq!(
+        cut.cuts,
+        vec![SHOT],
+        "the change of person, and nothing else"
+    );
+}
