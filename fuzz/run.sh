@@ -20,9 +20,9 @@ max_len() {
         exif) echo 512 ;;
         keypoints_json) echo 4096 ;;
         intrinsics_json | rigid_transform_json | pc2 | network_config) echo 1024 ;;
-        tum_list) echo 4096 ;;
+        tum_list | batch_manifest | streamed_records) echo 4096 ;;
         obj | ply | canonical_mesh) echo 4096 ;;
-        depth_png | tflite) echo 8192 ;;
+        depth_png | tflite | image) echo 8192 ;;
         *) echo "unknown fuzz target $1" >&2; exit 2 ;;
     esac
 }

@@ -23,8 +23,10 @@ cargo test --workspace
 bash scripts/test_deploy.sh
 bash scripts/test_slurm.sh "${CARGO_TARGET_DIR:-target}/debug/visage"
 RUSTDOCFLAGS="-D warnings" cargo doc -q --workspace --no-deps
-# The fuzz targets (fuzz/, a workspace of their own that `cargo +nightly fuzz` runs; see
-# fuzz/README.md) must keep compiling: formatted and type-checked on this toolchain, without
-# building libFuzzer's C++ runtime (--no-default-features), in fuzz/target.
+# The fuzz targets: their bodies (crates/fuzz-targets) are replayed above, by `cargo test`, on
+# their seeds and 20,000 deterministic mutants each; their cargo-fuzz wrappers (fuzz/, a
+# workspace of its own that `cargo +nightly fuzz` runs; see fuzz/README.md) must keep
+# compiling: formatted and type-checked on this toolchain, without building libFuzzer's C++
+# runtime (--no-default-features), in fuzz/target.
 cargo fmt --manifest-path fuzz/Cargo.toml --check
 cargo check -q --manifest-path fuzz/Cargo.toml --no-default-features

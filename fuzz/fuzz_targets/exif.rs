@@ -1,12 +1,5 @@
-//! `visage_video::focal_length_35mm_in`, the EXIF (TIFF) reader behind `focal_length_35mm`: any
-//! bytes give a positive focal length or nothing, never a panic.
+//! The `exif` target: [`visage_fuzz_targets::exif`] (what it reads and checks is documented
+//! there and in fuzz/README.md).
 #![no_main]
 
-use libfuzzer_sys::fuzz_target;
-use visage_video::focal_length_35mm_in;
-
-fuzz_target!(|data: &[u8]| {
-    if let Some(mm) = focal_length_35mm_in(data) {
-        assert!(mm.is_finite() && mm > 0.0, "focal length {mm}");
-    }
-});
+libfuzzer_sys::fuzz_target!(|data: &[u8]| visage_fuzz_targets::exif(data));

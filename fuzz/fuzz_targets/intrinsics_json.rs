@@ -1,19 +1,5 @@
-//! `Intrinsics::parse_json` (what `Intrinsics::load_json` reads an intrinsics file with): any
-//! text gives validated intrinsics or an error, never a panic.
+//! The `intrinsics_json` target: [`visage_fuzz_targets::intrinsics_json`] (what it reads and checks is documented
+//! there and in fuzz/README.md).
 #![no_main]
 
-use std::path::Path;
-
-use libfuzzer_sys::fuzz_target;
-use visage_camera::Intrinsics;
-
-fuzz_target!(|data: &[u8]| {
-    // `load_json` reads the file as UTF-8 text; other bytes are an I/O error before parsing.
-    let Ok(text) = std::str::from_utf8(data) else {
-        return;
-    };
-    match Intrinsics::parse_json(text, Path::new("fuzz.json")) {
-        Ok(k) => assert!(k.validate().is_ok(), "accepted invalid intrinsics {k:?}"),
-        Err(e) => drop(e.to_string()),
-    }
-});
+libfuzzer_sys::fuzz_target!(|data: &[u8]| visage_fuzz_targets::intrinsics_json(data));

@@ -1,19 +1,5 @@
-//! `RigidTransform::parse_json` (what `RigidTransform::load_json` reads a pose file with): any
-//! text gives a validated rigid motion or an error, never a panic.
+//! The `rigid_transform_json` target: [`visage_fuzz_targets::rigid_transform_json`] (what it reads and checks is documented
+//! there and in fuzz/README.md).
 #![no_main]
 
-use std::path::Path;
-
-use libfuzzer_sys::fuzz_target;
-use visage_camera::RigidTransform;
-
-fuzz_target!(|data: &[u8]| {
-    // `load_json` reads the file as UTF-8 text; other bytes are an I/O error before parsing.
-    let Ok(text) = std::str::from_utf8(data) else {
-        return;
-    };
-    match RigidTransform::parse_json(text, Path::new("pose.json")) {
-        Ok(t) => assert!(t.validate().is_ok(), "accepted an invalid transform {t:?}"),
-        Err(e) => drop(e.to_string()),
-    }
-});
+libfuzzer_sys::fuzz_target!(|data: &[u8]| visage_fuzz_targets::rigid_transform_json(data));

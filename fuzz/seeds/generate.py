@@ -381,6 +381,32 @@ write("network_config", "metric.json", '{"output": {"kind": "metric", "scale": 0
 write("network_config", "bad.json", '{"input": {"std": [0, 1, 1]}, "align": "none"}')
 
 
+# --- batch_manifest: the first byte picks JSON Lines (1) or plain lines (0). ----------------
+
+write("batch_manifest", "plain.txt", "\x00clips/a.mp4\n# a comment\n\nclips/b.mp4\tcam.json\n")
+write("batch_manifest", "json_lines.jsonl",
+      '\x01{"input": "a.mp4", "id": "take-1", "options": ["--fov-deg", "60"]}\n'
+      '{"input": "b.mp4", "intrinsics": "cam.json"}\n')
+write("batch_manifest", "same_id_twice.txt", "\x00a.mp4\nsub/../a.mkv\n")
+write("batch_manifest", "bom_and_bad_entry.jsonl", '\x01\ufeff{"input": 3, "extra": true}\n')
+
+# --- streamed_records: landmarks.json / blendshapes.json as a killed run leaves them. -------
+
+write("streamed_records", "cut_in_a_record.json",
+      '{"frames": [{"index": 0, "faces": []},{"index": 1, "faces": [{"landmarks": [[1.5, 2')
+write("streamed_records", "complete.json",
+      '{"fps": 30.0, "frames": [{"index": 0, "source": "a\\"}{b]", "w": [0.1]}]}\n')
+write("streamed_records", "no_frames.json", '{"landmarks": [{"index": 0}]}')
+
+# --- image: the image inputs (PNG, JPEG). ----------------------------------------------------
+
+write("image", "rgb_2x2.png", png(2, 2, 8, 2, [b"\xff\x00\x00\x00\xff\x00", b"\x00\x00\xff\xff\xff\xff"]))
+write("image", "grey_1x1.png", png(1, 1, 8, 0, [b"\x80"]))
+JPEG_8X8 = bytes.fromhex("ffd8ffe000104a46494600010200000100010000fffe00104c61766335392e33372e31303000ffdb004300080a0a0b0a0b0d0d0d0d0d0d100f101010101010101010101012121215151512121210101212141415151717171515151517171919191e1e1c1c2323242b2b33ffc4004c0001010000000000000000000000000000000601010100000000000000000000000000000607100100000000000000000000000000000000110100000000000000000000000000000000ffc00011080008000803012200021100031100ffda000c03010002110311003f008b00517f7fffd9")
+write("image", "red_8x8.jpg", JPEG_8X8)
+write("image", "truncated.jpg", JPEG_8X8[:100])
+
+
 if __name__ == "__main__":
     depth_png()
     json_files()

@@ -38,13 +38,28 @@ impl<T> Scan<T> {
 /// The file cannot be read, or it has no `"frames"` array at its top level.
 pub fn scan_frames<T>(
     path: &Path,
+    parse: impl FnMut(&[u8]) -> Option<T>,
+) -> Result<Scan<T>, Error> {
+    let file = std::fs::File::open(path).map_err(|source| Error::Read {
+        path: path.to_owned(),
+        source,
+    })?;
+    scan_records(file, path, parse)
+}
+
+/// [`scan_frames`] of what `file` reads; `path` only names it in errors.
+///
+/// # Errors
+/// `file` cannot be read, or it has no `"frames"` array at its top level.
+pub fn scan_records<T>(
+    mut file: impl Read,
+    path: &Path,
     mut parse: impl FnMut(&[u8]) -> Option<T>,
 ) -> Result<Scan<T>, Error> {
     let read_error = |source| Error::Read {
         path: path.to_owned(),
         source,
     };
-    let mut file = std::fs::File::open(path).map_err(read_error)?;
     let mut scanner = Scanner::default();
     let mut records = Vec::new();
     let mut block = vec![0u8; 1 << 16];

@@ -36,7 +36,7 @@ pub use error::RunFolderError;
 pub use folder::{claim, clear_outputs, inspect, Claimed, Cleared, FolderContents};
 pub use folder_lock::{FolderLock, LockHolder};
 pub use input_file::{sha256_of, InputFile};
-pub use json_records::scan_frames;
+pub use json_records::{scan_frames, scan_records, Scan};
 pub use landmarks::{FaceRecord, LandmarksFrame, PoseRecord};
 pub use live_link_csv::{
     live_link_timecode, read_live_link_csv, LiveLinkCsvWriter, LiveLinkRow, LiveLinkTake,

@@ -30,4 +30,4 @@ pub use error::VideoError;
 pub use exif::{focal_length_35mm, focal_length_35mm_in};
 pub use ffmpeg::{ffmpeg_available, probe, VideoInfo, VideoReader};
 pub use frame::Frame;
-pub use source::{is_image_path, read_image, FrameSource, IMAGE_EXTENSIONS};
+pub use source::{decode_image, is_image_path, read_image, FrameSource, IMAGE_EXTENSIONS};

@@ -24,16 +24,21 @@ fn is_hidden(path: &Path) -> bool {
 /// portrait photo is stored sideways with a tag that says so; video rotation metadata is
 /// honoured the same way by the video reader).
 pub fn read_image(path: &Path) -> Result<Frame, VideoError> {
-    use image::ImageDecoder;
     let bytes = std::fs::read(path).map_err(|source| VideoError::Io {
         path: path.to_owned(),
         source,
     })?;
+    decode_image(&bytes, path)
+}
+
+/// [`read_image`] of a file's bytes; `path` only names it in errors and in the frame.
+pub fn decode_image(bytes: &[u8], path: &Path) -> Result<Frame, VideoError> {
+    use image::ImageDecoder;
     let in_words = |e: image::ImageError| VideoError::Image {
         path: path.to_owned(),
         reason: image_error_in_words(&e),
     };
-    let mut decoder = image::ImageReader::new(std::io::Cursor::new(&bytes))
+    let mut decoder = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| in_words(image::ImageError::IoError(e)))?
         .into_decoder()

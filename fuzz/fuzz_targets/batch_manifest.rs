@@ -1,0 +1,5 @@
+//! The `batch_manifest` target: [`visage_fuzz_targets::batch_manifest`] (what it reads and checks is documented
+//! there and in fuzz/README.md).
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| visage_fuzz_targets::batch_manifest(data));

@@ -1,0 +1,5 @@
+//! The `streamed_records` target: [`visage_fuzz_targets::streamed_records`] (what it reads and checks is documented
+//! there and in fuzz/README.md).
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| visage_fuzz_targets::streamed_records(data));
