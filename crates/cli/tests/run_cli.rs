@@ -967,3 +967,50 @@ fn an_image_plane_mesh_too_fine_for_the_face_is_refused_with_the_spacing_that_fi
         "{err}"
     );
 }
+
+/// Two people filmed alike, one after the other (each face cropped to the same place on the
+/// same grey background): metrics.json lists a cut where the second starts.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn another_person_filmed_alike_is_listed_as_a_cut() {
+    let models = visage_testdata::models_dir();
+    let video = visage_testdata::shared_dir().join("data/video");
+    let tmp = tempfile::tempdir().unwrap();
+    let clip = tmp.path().join("two_people.mp4");
+    let place = "scale=300:300,pad=640:480:170:90:gray,setsar=1";
+    let filter = format!(
+        "[0:v]trim=end_frame=15,setpts=PTS-STARTPTS,crop=330:330:81:120,{place}[a];\
+         [1:v]trim=end_frame=15,setpts=PTS-STARTPTS,crop=550:550:93:362,{place}[b];\
+         [a][b]concat=n=2:v=1[v]"
+    );
+    let status = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i"])
+        .arg(video.join("lp_d18.mp4"))
+        .arg("-i")
+        .arg(video.join("lp_d13.mp4"))
+        .args(["-filter_complex", &filter, "-map", "[v]", "-crf", "16"])
+        .arg(&clip)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let out = tmp.path().join("out");
+    run_ok(&[
+        "run",
+        s(&clip),
+        "--out",
+        s(&out),
+        "--models",
+        s(&models),
+        "--quiet",
+    ]);
+    let m = json(&out.join("metrics.json"));
+    assert_eq!(
+        m["summary"]["cuts"],
+        serde_json::json!([15]),
+        "{}",
+        m["summary"]
+    );
+}
