@@ -79,6 +79,12 @@ enum Command {
     BenchSolver(commands::bench_solver::BenchSolverArgs),
     /// Render a mesh to a colour PNG and/or a 16-bit depth PNG
     Render(commands::render::RenderArgs),
+    /// A camera or a stream, processed as it arrives and streamed out (VMC, Live Link Face)
+    ///
+    /// Frame by frame, causally: when processing falls behind, the newest frame wins and the
+    /// others are dropped and counted. The closing line gives frames in, processed and dropped,
+    /// and the latency from capture to the streams.
+    Live(commands::live::LiveArgs),
     /// Landmarks, metric head pose and face depth maps
     ///
     /// 468 FaceMesh landmarks per face and frame of images or videos, the metric head pose,
@@ -121,6 +127,7 @@ fn main() -> ExitCode {
         Command::Fair(args) => commands::fair::run(args),
         Command::BenchSolver(args) => commands::bench_solver::run(args),
         Command::Render(args) => commands::render::run(args),
+        Command::Live(args) => commands::live::run(args),
         Command::Landmarks(args) => commands::landmarks::run(args),
         Command::Keypoints(args) => commands::keypoints::run(args),
         Command::Match(args) => commands::matches::run(args),

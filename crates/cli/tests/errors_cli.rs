@@ -346,6 +346,10 @@ const OTHER_TESTS: &[(&str, &str)] = &[
         "run_cli::a_truncated_video_keeps_the_readable_frames_and_names_the_break",
     ),
     (
+        "a live source that cannot be opened",
+        "live_cli::a_source_that_cannot_be_opened_is_exit_2_naming_it",
+    ),
+    (
         "intrinsics for another image size",
         "run_cli::intrinsics_for_another_size_are_exit_2_naming_the_file",
     ),

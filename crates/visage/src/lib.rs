@@ -54,6 +54,7 @@ mod folder_run;
 mod input;
 mod keypoint_motion;
 mod landmark_reader;
+pub mod live;
 mod pipeline;
 mod process_stats;
 mod quality;

@@ -11,6 +11,7 @@ pub mod fair;
 pub mod fuse;
 pub mod keypoints;
 pub mod landmarks;
+pub mod live;
 pub mod matches;
 pub mod model;
 pub mod models;

@@ -1,0 +1,109 @@
+//! `visage live`: a camera, a stream, standard input or a file played at its pace, processed
+//! frame by frame as it arrives and streamed out while it happens. A command of its own rather
+//! than `visage run --live`: it is causal only, drops frames rather than queue them when it
+//! falls behind, runs until the source ends or Ctrl-C, and its outputs are streams: the VMC
+//! protocol (VTuber apps) and Live Link Face's packets (Unreal).
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+use visage::live::{LiveLinkFaceSender, LiveSession, LiveSubscriber, VmcSender};
+use visage::{check_fov, Camera, Reconstructor};
+use visage_video::{LiveCapture, LiveOptions};
+
+use crate::interrupt;
+
+/// `visage live`'s flags.
+#[derive(Args, Debug)]
+pub struct LiveArgs {
+    /// What to read: a camera (`/dev/video0`, through FFmpeg's V4L2 input), a network stream
+    /// FFmpeg opens (`udp://…`, `rtsp://…`, `http://…`, `srt://…`), `-` for standard input (any
+    /// container FFmpeg recognises), or a video file (with --realtime, at its own pace).
+    pub source: String,
+    /// Read a file at its own frame rate, as a camera delivers frames. Without it a file is
+    /// read as fast as FFmpeg decodes it, and the frames that arrive while one is processed
+    /// are dropped (to process every frame of a file, use `visage run`).
+    #[arg(long)]
+    pub realtime: bool,
+    /// Send the ARKit weights by the VMC protocol (OSC over UDP) to HOST:PORT (VSeeFace,
+    /// Warudo, VNyan and VMagicMirror listen on 39539 by default).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub vmc: Option<String>,
+    /// Send Live Link Face's UDP packets (what Unreal's Live Link receives from the iPhone app)
+    /// to HOST:PORT (Unreal listens on 11111).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub live_link: Option<String>,
+    /// The Live Link subject name.
+    #[arg(long, default_value = "visage", requires = "live_link")]
+    pub subject: String,
+    /// The Live Link device id (the app sends a 36-character UUID).
+    #[arg(long, default_value = visage::live::DEFAULT_DEVICE_ID, requires = "live_link")]
+    pub device_id: String,
+    /// Horizontal field of view of the camera, degrees (default: as `visage run`).
+    #[arg(long)]
+    pub fov_deg: Option<f64>,
+    /// Stop after this many processed frames.
+    #[arg(long)]
+    pub max_frames: Option<usize>,
+    /// Model directory; default: $VISAGE_MODELS, else ./models or a models/ folder beside the
+    /// executable (see `visage models fetch`).
+    #[arg(long)]
+    pub models: Option<PathBuf>,
+    /// No closing line.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Runs `visage live`.
+pub fn run(args: LiveArgs) -> anyhow::Result<()> {
+    if let Some(fov) = args.fov_deg {
+        check_fov(fov)?;
+    }
+    let mut subscribers: Vec<Box<dyn LiveSubscriber>> = Vec::new();
+    if let Some(target) = &args.vmc {
+        let sender = VmcSender::new(target).with_context(|| format!("--vmc {target}"))?;
+        subscribers.push(Box::new(sender));
+    }
+    if let Some(target) = &args.live_link {
+        let sender = LiveLinkFaceSender::new(target, &args.subject, &args.device_id)
+            .with_context(|| format!("--live-link {target}"))?;
+        subscribers.push(Box::new(sender));
+    }
+    let options = LiveOptions {
+        realtime: args.realtime,
+    };
+    let capture = LiveCapture::open(&args.source, &options)?;
+    let (width, height) = capture.size();
+    let mut builder = Reconstructor::builder().camera(match args.fov_deg {
+        Some(fov) => Camera::FovDeg(fov),
+        None => Camera::Auto,
+    });
+    if let Some(dir) = &args.models {
+        builder = builder.models_dir(dir);
+    }
+    let mut session = LiveSession::new(builder.build(width, height)?);
+    let stop = interrupt::install("the streams stopped where they were");
+    let summary = session.run(&capture, &mut subscribers, &stop, args.max_frames)?;
+    if !args.quiet {
+        let to: Vec<String> = subscribers.iter().map(|s| s.describe()).collect();
+        eprintln!(
+            "{}: {} frames in, {} processed ({} with a face), {} dropped; {:.1} fps; latency \
+             p50 {:.1} ms, p95 {:.1} ms{}",
+            args.source,
+            summary.captured,
+            summary.processed,
+            summary.with_face,
+            summary.dropped,
+            summary.fps,
+            summary.latency.p50_ms,
+            summary.latency.p95_ms,
+            if to.is_empty() {
+                "; nothing streamed (--vmc, --live-link)".to_owned()
+            } else {
+                format!("; sent {}", to.join(", "))
+            }
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,290 @@
+//! `visage live` as a VTuber setup runs it: a clip played at its own pace (as a camera delivers
+//! frames) streamed by the VMC protocol to a UDP receiver, whose datagrams are decoded here as
+//! OSC; and sources that cannot be opened.
+
+mod common;
+
+use std::net::UdpSocket;
+use std::time::Duration;
+
+use common::{s, visage};
+use visage::ARKIT_BLENDSHAPES;
+
+/// One OSC argument, as decoded.
+#[derive(Debug, PartialEq)]
+enum Arg {
+    Int(i32),
+    Float(f32),
+    Str(String),
+}
+
+/// Reads an OSC string at `*at` (NUL-terminated, padded to 4).
+fn read_str(bytes: &[u8], at: &mut usize) -> String {
+    let end = *at + bytes[*at..].iter().position(|&b| b == 0).unwrap();
+    let s = String::from_utf8(bytes[*at..end].to_vec()).unwrap();
+    *at = (end + 4) & !3;
+    s
+}
+
+/// The messages of one OSC packet (a message or a bundle of them).
+fn decode(bytes: &[u8], out: &mut Vec<(String, Vec<Arg>)>) {
+    let mut at = 0;
+    if bytes.starts_with(b"#bundle\0") {
+        at = 16;
+        while at < bytes.len() {
+            let n = i32::from_be_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+            decode(&bytes[at + 4..at + 4 + n], out);
+            at += 4 + n;
+        }
+        return;
+    }
+    let address = read_str(bytes, &mut at);
+    let tags = read_str(bytes, &mut at);
+    assert!(tags.starts_with(','), "{tags}");
+    let mut args = Vec::new();
+    for t in tags[1..].chars() {
+        let word = |at: &mut usize| {
+            let w: [u8; 4] = bytes[*at..*at + 4].try_into().unwrap();
+            *at += 4;
+            w
+        };
+        args.push(match t {
+            'i' => Arg::Int(i32::from_be_bytes(word(&mut at))),
+            'f' => Arg::Float(f32::from_be_bytes(word(&mut at))),
+            's' => Arg::Str(read_str(bytes, &mut at)),
+            other => panic!("type tag {other}"),
+        });
+    }
+    assert_eq!(at, bytes.len(), "{address}: trailing bytes");
+    out.push((address, args));
+}
+
+/// A clip played at its pace to a VMC receiver: every processed frame with a face arrives as
+/// OK, T, the 52 ARKit weights by name in [0, 1], then Apply; times increase; the closing line
+/// counts frames in, processed and dropped, and gives the latency.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_clip_played_live_reaches_a_vmc_receiver_frame_by_frame() {
+    let (models, clip) = common::inputs();
+    let receiver = UdpSocket::bind("127.0.0.1:0").unwrap();
+    receiver
+        .set_read_timeout(Some(Duration::from_millis(200)))
+        .unwrap();
+    let target = receiver.local_addr().unwrap().to_string();
+    let collect = std::thread::spawn(move || {
+        let mut messages = Vec::new();
+        let mut buffer = [0u8; 65536];
+        let mut idle = 0;
+        while idle < 25 {
+            match receiver.recv(&mut buffer) {
+                Ok(n) => {
+                    idle = 0;
+                    decode(&buffer[..n], &mut messages);
+                }
+                Err(_) => idle += 1,
+            }
+        }
+        messages
+    });
+    let o = visage(&[
+        "live",
+        s(&clip),
+        "--realtime",
+        "--vmc",
+        &target,
+        "--max-frames",
+        "30",
+        "--models",
+        s(&models),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let messages = collect.join().unwrap();
+
+    let processed: usize = err
+        .split(" processed")
+        .next()
+        .and_then(|s| s.rsplit(", ").next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{err}"));
+    assert_eq!(processed, 30, "{err}");
+    assert!(
+        err.contains("dropped") && err.contains("latency p50"),
+        "{err}"
+    );
+    let frames: Vec<&[(String, Vec<Arg>)]> = messages
+        .split_inclusive(|(a, _)| a == "/VMC/Ext/Blend/Apply")
+        .filter(|f| f.last().is_some_and(|(a, _)| a == "/VMC/Ext/Blend/Apply"))
+        .collect();
+    assert_eq!(
+        frames.len(),
+        30,
+        "one applied frame per processed frame (the clip has a face)"
+    );
+    let mut last_t = -1.0;
+    for frame in frames {
+        assert_eq!(frame[0], ("/VMC/Ext/OK".into(), vec![Arg::Int(1)]));
+        let Arg::Float(t) = frame[1].1[0] else {
+            panic!("{:?}", frame[1])
+        };
+        assert!(frame[1].0 == "/VMC/Ext/T" && t > last_t, "{:?}", frame[1]);
+        last_t = t;
+        let values = &frame[2..frame.len() - 1];
+        assert_eq!(values.len(), 52);
+        for ((address, args), name) in values.iter().zip(ARKIT_BLENDSHAPES) {
+            assert_eq!(address, "/VMC/Ext/Blend/Val");
+            assert_eq!(args[0], Arg::Str(name.to_string()));
+            let Arg::Float(w) = args[1] else {
+                panic!("{args:?}")
+            };
+            assert!((0.0..=1.0).contains(&w), "{name} = {w}");
+        }
+    }
+    // Played at its pace (30 fps) the 30 frames take about a second.
+    assert!(last_t > 0.8, "the last frame at {last_t} s");
+}
+
+/// A source FFmpeg cannot open: exit 2, naming it and FFmpeg's reason.
+#[test]
+#[cfg_attr(not(ffmpeg), ignore = "needs FFmpeg")]
+fn a_source_that_cannot_be_opened_is_exit_2_naming_it() {
+    let o = visage(&[
+        "live",
+        "/nonexistent/camera.mp4",
+        "--vmc",
+        "127.0.0.1:39539",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("/nonexistent/camera.mp4") && err.contains("No such file"),
+        "{err}"
+    );
+}
+
+/// Both streams at once, to two receivers: Live Link Face's packets decoded by a real client
+/// (the PyPI package `pylivelinkface`, which reads the iPhone app's packets; set up by
+/// `scripts/setup.sh` in `target/live-venv`), frame by frame equal, name by name, to the
+/// VMC stream's weights — so every blendshape lands in the slot Unreal reads under its name.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn live_link_packets_decode_in_a_real_client_as_the_same_weights() {
+    let target_dir = std::env::var_os("CARGO_TARGET_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| visage_testdata::workspace_root().join("target"));
+    let python = target_dir.join("live-venv/bin/python");
+    if !python.is_file() {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "{} is missing: run scripts/setup.sh",
+            python.display()
+        );
+        eprintln!(
+            "skipped: no {} (scripts/setup.sh makes it)",
+            python.display()
+        );
+        return;
+    }
+    let (models, clip) = common::inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let decoded = tmp.path().join("decoded.json");
+    let client = "import socket, sys, json\n\
+        from pylivelinkface import PyLiveLinkFace, FaceBlendShape\n\
+        s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM); s.bind(('127.0.0.1', 0))\n\
+        s.settimeout(5); print(s.getsockname()[1], flush=True)\n\
+        out = []\n\
+        while True:\n\
+        \x20   try: data, _ = s.recvfrom(4096)\n\
+        \x20   except socket.timeout: break\n\
+        \x20   ok, face = PyLiveLinkFace.decode(data)\n\
+        \x20   out.append({'ok': ok, 'name': face.name, 'uuid': face.uuid, 'fps': face.fps,\n\
+        \x20               'shapes': {b.name: face.get_blendshape(b) for b in FaceBlendShape}})\n\
+        json.dump(out, open(sys.argv[1], 'w'))\n";
+    let mut receiver = std::process::Command::new(&python)
+        .args(["-c", client])
+        .arg(&decoded)
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut port = String::new();
+    std::io::BufRead::read_line(
+        &mut std::io::BufReader::new(receiver.stdout.take().unwrap()),
+        &mut port,
+    )
+    .unwrap();
+    let vmc = UdpSocket::bind("127.0.0.1:0").unwrap();
+    vmc.set_read_timeout(Some(Duration::from_millis(200)))
+        .unwrap();
+    let vmc_target = vmc.local_addr().unwrap().to_string();
+    let collect = std::thread::spawn(move || {
+        let (mut messages, mut buffer, mut idle) = (Vec::new(), [0u8; 65536], 0);
+        while idle < 25 {
+            match vmc.recv(&mut buffer) {
+                Ok(n) => {
+                    idle = 0;
+                    decode(&buffer[..n], &mut messages);
+                }
+                Err(_) => idle += 1,
+            }
+        }
+        messages
+    });
+    let o = visage(&[
+        "live",
+        s(&clip),
+        "--realtime",
+        "--max-frames",
+        "20",
+        "--vmc",
+        &vmc_target,
+        "--live-link",
+        &format!("127.0.0.1:{}", port.trim()),
+        "--subject",
+        "Actor",
+        "--models",
+        s(&models),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(receiver.wait().unwrap().success());
+    let packets = common::json(&decoded);
+    let packets = packets.as_array().unwrap();
+    let messages = collect.join().unwrap();
+    let vmc_frames: Vec<Vec<(String, f32)>> = messages
+        .split(|(a, _)| a == "/VMC/Ext/Blend/Apply")
+        .filter(|f| f.iter().any(|(a, _)| a == "/VMC/Ext/Blend/Val"))
+        .map(|f| {
+            f.iter()
+                .filter(|(a, _)| a == "/VMC/Ext/Blend/Val")
+                .map(|(_, args)| match (&args[0], &args[1]) {
+                    (Arg::Str(n), Arg::Float(w)) => (n.clone(), *w),
+                    other => panic!("{other:?}"),
+                })
+                .collect()
+        })
+        .collect();
+    assert_eq!(packets.len(), 20, "one packet per frame with a face");
+    assert_eq!(vmc_frames.len(), 20);
+    for (packet, weights) in packets.iter().zip(&vmc_frames) {
+        assert_eq!(packet["ok"], true);
+        assert_eq!(packet["name"], "Actor");
+        assert_eq!(packet["fps"], 60);
+        // pylivelinkface keeps the length's low byte, '$' (36), before a 36-character id.
+        assert_eq!(
+            packet["uuid"],
+            format!("${}", visage::live::DEFAULT_DEVICE_ID)
+        );
+        for (name, w) in weights {
+            let mut client_name = name.clone();
+            client_name[..1].make_ascii_uppercase();
+            let decoded = packet["shapes"][&client_name].as_f64().unwrap();
+            assert_eq!(decoded as f32, *w, "{name}");
+        }
+    }
+}

@@ -1,0 +1,15 @@
+//! Live capture: a source read as it arrives ([`visage_video::LiveCapture`]: the newest frame
+//! wins), each frame processed causally by a [`crate::Reconstructor`] and handed to the
+//! session's subscribers — the streams out — the moment it is done, with the latency from its
+//! capture to the subscribers' return measured per frame ([`LiveSession`]). The streams:
+//! the VMC protocol over OSC ([`VmcSender`]) and Live Link Face's UDP packet
+//! ([`LiveLinkFaceSender`], Unreal's Live Link).
+
+mod live_link_face;
+mod osc;
+mod session;
+mod vmc;
+
+pub use live_link_face::{LiveLinkFaceSender, DEFAULT_DEVICE_ID, UNREAL_ORDER};
+pub use session::{LatencyFigures, LiveFrame, LiveSession, LiveSubscriber, LiveSummary};
+pub use vmc::VmcSender;
