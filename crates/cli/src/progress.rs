@@ -20,7 +20,7 @@ pub fn progress_bar(quiet: bool, total: Option<usize>) -> ProgressBar {
     let bar = ProgressBar::with_draw_target(total.map(|n| n as u64), ProgressDrawTarget::stderr());
     let template = match total {
         Some(_) => "{bar:40} {pos}/{len} frames  {fps}  eta {eta}",
-        None => "{spinner} {pos} frames  {fps}",
+        None => "{spinner} {pos} frames  {fps}  {msg}",
     };
     if let Ok(style) = ProgressStyle::with_template(template) {
         bar.set_style(style.with_key("fps", fps));

@@ -8,7 +8,8 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use visage::live::{LiveLinkFaceSender, LiveSession, LiveSubscriber, VmcSender};
+use indicatif::ProgressBar;
+use visage::live::{LiveFrame, LiveLinkFaceSender, LiveSession, LiveSubscriber, VmcSender};
 use visage::{check_fov, Camera, Reconstructor};
 use visage_video::{LiveCapture, LiveOptions};
 
@@ -84,7 +85,13 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
     }
     let mut session = LiveSession::new(builder.build(width, height)?);
     let stop = interrupt::install("the streams stopped where they were");
-    let summary = session.run(&capture, &mut subscribers, &stop, args.max_frames)?;
+    let streams = subscribers.len();
+    let bar = crate::progress::progress_bar(args.quiet, None);
+    subscribers.push(Box::new(Status { bar: bar.clone() }));
+    let summary = session.run(&capture, &mut subscribers, &stop, args.max_frames);
+    bar.finish_and_clear();
+    subscribers.truncate(streams);
+    let summary = summary?;
     if !args.quiet {
         let to: Vec<String> = subscribers.iter().map(|s| s.describe()).collect();
         eprintln!(
@@ -106,4 +113,30 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The terminal's status line while it runs: frames, frame rate, this frame's latency so far
+/// (its packets have left: it is the last subscriber) and whether it had a face.
+struct Status {
+    bar: ProgressBar,
+}
+
+impl LiveSubscriber for Status {
+    fn frame(&mut self, frame: &LiveFrame<'_>) -> std::io::Result<()> {
+        self.bar.inc(1);
+        self.bar.set_message(format!(
+            "latency {:.0} ms{}",
+            frame.captured_at.elapsed().as_secs_f64() * 1e3,
+            if frame.result.blendshapes.is_some() {
+                ""
+            } else {
+                ", no face"
+            }
+        ));
+        Ok(())
+    }
+
+    fn describe(&self) -> String {
+        "the terminal".into()
+    }
 }
