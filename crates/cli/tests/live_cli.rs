@@ -288,3 +288,50 @@ fn live_link_packets_decode_in_a_real_client_as_the_same_weights() {
         }
     }
 }
+
+/// A live session recorded with `--out`: the folder `visage run` writes, every processed
+/// frame in it with its latency, and `visage export` makes a glb of it; a second session into
+/// the same folder is refused, as a second run is.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_recorded_session_is_a_run_folder_that_exports() {
+    let (models, clip) = common::inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("take");
+    let args = [
+        "live",
+        s(&clip),
+        "--realtime",
+        "--out",
+        s(&out),
+        "--max-frames",
+        "25",
+        "--models",
+        s(&models),
+    ];
+    let o = visage(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("recorded into"), "{err}");
+    let m = common::json(&out.join("metrics.json"));
+    assert_eq!(m["status"], "complete");
+    let frames = m["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 25);
+    assert!(frames
+        .iter()
+        .all(|f| f["latency_ms"].as_f64().is_some_and(|ms| ms > 0.0)));
+    let cache = visage_mesh::io::read_pc2(&out.join("sequence.pc2")).unwrap();
+    assert_eq!(cache.samples(), 25);
+    let csv = std::fs::read_to_string(out.join("blendshapes.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 26);
+    common::run_ok(&["export", s(&out), "--glb", "--quiet"]);
+    assert!(out.join("sequence.glb").is_file());
+
+    let o = visage(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("not empty"), "{err}");
+}

@@ -56,7 +56,7 @@ mod keypoint_motion;
 mod landmark_reader;
 pub mod live;
 mod pipeline;
-mod process_stats;
+pub mod process_stats;
 mod quality;
 mod reconstructor;
 mod recorder;

@@ -413,6 +413,48 @@ impl Reconstructor {
         })
     }
 
+    /// What the frames given to [`Reconstructor::process`] came to, as [`Reconstructor::run`]
+    /// reports a run: the records, the summary (wall time from `started`, CPU time since
+    /// `cpu_at_start`, as [`crate::process_stats`] reads it), the identity; `error` is what
+    /// stopped it, if anything.
+    pub fn finish(
+        self,
+        started: Instant,
+        cpu_at_start: Option<f64>,
+        error: Option<Error>,
+    ) -> RunOutcome {
+        let identity = self.model.zip(self.model_stage).and_then(|(model, stage)| {
+            let fitter = &stage.fitter;
+            (fitter.identity_frames() > 0).then(|| Identity {
+                coefficients: fitter.identity().to_vec(),
+                frames: fitter.identity_frames(),
+                model,
+            })
+        });
+        let timing = RunTiming {
+            wall_s: started.elapsed().as_secs_f64(),
+            setup_ms: self.setup_ms,
+            cpu_s: crate::process_stats::cpu_seconds()
+                .zip(cpu_at_start)
+                .map(|(now, then)| now - then),
+            peak_rss_mib: crate::process_stats::peak_rss_mib(),
+        };
+        let summary = self.recorder.summary(timing);
+        RunOutcome {
+            mesh: MeshSummary {
+                vertices: self.recorder.vertices.max(self.fuse.fusion.vertex_count()),
+                triangles: self.mesh.triangles.len(),
+                ..MeshSummary::default()
+            },
+            frames: self.recorder.frames,
+            summary,
+            error,
+            parameters: self.parameters,
+            intrinsics: self.face.k,
+            identity,
+        }
+    }
+
     /// Processes every frame of `input` in the configured mode and hands the results to `sink`
     /// in input order: decoding, tracking and fusion run on their own threads. Stops at the
     /// first error (in `RunOutcome::error`); what came before is kept.

@@ -44,6 +44,13 @@ pub struct LiveArgs {
     /// Horizontal field of view of the camera, degrees (default: as `visage run`).
     #[arg(long)]
     pub fov_deg: Option<f64>,
+    /// Also record the session into this folder, as `visage run` writes one (point cache,
+    /// landmarks, blendshape curves, metrics with each frame's latency), for `visage export`.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// With --out: replace a previous run's files in the folder (other files stay).
+    #[arg(long, requires = "out")]
+    pub overwrite: bool,
     /// Stop after this many processed frames.
     #[arg(long)]
     pub max_frames: Option<usize>,
@@ -84,6 +91,15 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
         builder = builder.models_dir(dir);
     }
     let mut session = LiveSession::new(builder.build(width, height)?);
+    // Held until the recording is finished.
+    let _lock = match &args.out {
+        Some(dir) => {
+            let lock = crate::commands::run::claim_output_folder(dir, args.overwrite, false)?;
+            session.record_into(dir, &args.source)?;
+            Some(lock)
+        }
+        None => None,
+    };
     let stop = interrupt::install("the streams stopped where they were");
     let streams = subscribers.len();
     let bar = crate::progress::progress_bar(args.quiet, None);
@@ -91,7 +107,6 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
     let summary = session.run(&capture, &mut subscribers, &stop, args.max_frames);
     bar.finish_and_clear();
     subscribers.truncate(streams);
-    let summary = summary?;
     if !args.quiet {
         let to: Vec<String> = subscribers.iter().map(|s| s.describe()).collect();
         eprintln!(
@@ -105,14 +120,18 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
             summary.fps,
             summary.latency.p50_ms,
             summary.latency.p95_ms,
-            if to.is_empty() {
-                "; nothing streamed (--vmc, --live-link)".to_owned()
-            } else {
-                format!("; sent {}", to.join(", "))
+            match (to.is_empty(), &args.out) {
+                (true, None) =>
+                    "; nothing streamed or recorded (--vmc, --live-link, --out)".to_owned(),
+                (true, Some(dir)) => format!("; recorded into {}", dir.display()),
+                (false, None) => format!("; sent {}", to.join(", ")),
+                (false, Some(dir)) => {
+                    format!("; sent {}; recorded into {}", to.join(", "), dir.display())
+                }
             }
         );
     }
-    Ok(())
+    Ok(session.finish()?)
 }
 
 /// The terminal's status line while it runs: frames, frame rate, this frame's latency so far

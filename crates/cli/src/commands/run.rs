@@ -235,7 +235,7 @@ pub enum FacesArg {
 /// that is not empty, or (with `--overwrite`) removes a previous run's files from it, saying
 /// what it found; with `resume`, a run there is continued. The returned lock is held until
 /// dropped.
-fn claim_output_folder(
+pub(crate) fn claim_output_folder(
     out: &std::path::Path,
     overwrite: bool,
     resume: bool,

@@ -3,13 +3,16 @@
 //! session's subscribers — the streams out — the moment it is done, with the latency from its
 //! capture to the subscribers' return measured per frame ([`LiveSession`]). The streams:
 //! the VMC protocol over OSC ([`VmcSender`]) and Live Link Face's UDP packet
-//! ([`LiveLinkFaceSender`], Unreal's Live Link).
+//! ([`LiveLinkFaceSender`], Unreal's Live Link). A session can also be recorded into the
+//! folder `visage run` writes ([`LiveRecording`]).
 
 mod live_link_face;
 mod osc;
+mod recording;
 mod session;
 mod vmc;
 
 pub use live_link_face::{LiveLinkFaceSender, DEFAULT_DEVICE_ID, UNREAL_ORDER};
+pub use recording::LiveRecording;
 pub use session::{LatencyFigures, LiveFrame, LiveSession, LiveSubscriber, LiveSummary};
 pub use vmc::VmcSender;

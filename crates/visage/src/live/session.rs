@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use visage_video::LiveCapture;
 
+use super::recording::LiveRecording;
 use crate::{Error, FrameResult, Reconstructor};
 
 /// One processed frame, as subscribers get it.
@@ -57,36 +58,123 @@ pub struct LiveSummary {
 /// A reconstructor fed by a live source.
 pub struct LiveSession {
     reconstructor: Reconstructor,
+    recording: Option<LiveRecording>,
+    started: Instant,
+    cpu_at_start: Option<f64>,
+    latencies_ms: Vec<(usize, f64)>,
+    /// What stopped [`LiveSession::run`], given back by [`LiveSession::finish`].
+    error: Option<Error>,
 }
 
 impl LiveSession {
     /// A session processing frames with `reconstructor` (built for the source's size; causal).
     pub fn new(reconstructor: Reconstructor) -> LiveSession {
-        LiveSession { reconstructor }
+        LiveSession {
+            reconstructor,
+            recording: None,
+            started: Instant::now(),
+            cpu_at_start: crate::process_stats::cpu_seconds(),
+            latencies_ms: Vec::new(),
+            error: None,
+        }
+    }
+
+    /// Also writes every processed frame into the folder `dir` (claimed by the caller), as
+    /// `visage run` does, `input` naming the source there ([`LiveRecording`]).
+    ///
+    /// # Errors
+    /// The folder cannot be written.
+    pub fn record_into(&mut self, dir: &std::path::Path, input: &str) -> Result<(), Error> {
+        self.recording = Some(LiveRecording::start(dir, &self.reconstructor, input)?);
+        Ok(())
+    }
+
+    /// Ends the session: a recording's files are finished and its `metrics.json` written (each
+    /// frame with its latency; the status says how the session ended).
+    ///
+    /// # Errors
+    /// What stopped [`LiveSession::run`] (the source broke, a frame could not be processed, a
+    /// stream or the recording failed), else a recording's file that could not be written.
+    pub fn finish(self) -> Result<(), Error> {
+        let LiveSession {
+            reconstructor,
+            recording,
+            started,
+            cpu_at_start,
+            latencies_ms,
+            error,
+        } = self;
+        let Some(recording) = recording else {
+            return error.map_or(Ok(()), Err);
+        };
+        let outcome = reconstructor.finish(started, cpu_at_start, error);
+        let written = recording.finish(&outcome, &latencies_ms);
+        match outcome.error {
+            Some(e) => Err(e),
+            None => written,
+        }
     }
 
     /// Processes the newest frame of `capture` again and again, handing each to every
-    /// subscriber, until the source ends, `stop` turns true or `max_frames` were processed.
-    ///
-    /// # Errors
-    /// The source broke, a frame could not be processed, or a subscriber failed; what was
-    /// sent before stays sent.
+    /// subscriber (then to the recording), until the source ends, `stop` turns true or
+    /// `max_frames` were processed. A failure — the source broke, a frame could not be
+    /// processed, a stream or the recording failed — ends it too; [`LiveSession::finish`]
+    /// gives it back. What was sent before stays sent.
     pub fn run(
         &mut self,
         capture: &LiveCapture,
         subscribers: &mut [Box<dyn LiveSubscriber>],
         stop: &AtomicBool,
         max_frames: Option<usize>,
-    ) -> Result<LiveSummary, Error> {
-        let started = capture.started();
-        let mut latencies = Vec::new();
+    ) -> LiveSummary {
         let mut with_face = 0;
+        let mut latencies = std::mem::take(&mut self.latencies_ms);
+        if let Err(e) = self.process(
+            capture,
+            subscribers,
+            stop,
+            max_frames,
+            &mut latencies,
+            &mut with_face,
+        ) {
+            self.error = Some(e);
+        }
+        let (captured, dropped) = capture.counts();
+        let elapsed = capture.started().elapsed().as_secs_f64();
+        let mut ms: Vec<f64> = latencies.iter().map(|l| l.1).collect();
+        let summary = LiveSummary {
+            captured,
+            processed: latencies.len(),
+            dropped,
+            with_face,
+            latency: latency_figures(&mut ms),
+            fps: if elapsed > 0.0 {
+                latencies.len() as f64 / elapsed
+            } else {
+                0.0
+            },
+        };
+        self.latencies_ms = latencies;
+        summary
+    }
+
+    /// [`LiveSession::run`]'s loop.
+    fn process(
+        &mut self,
+        capture: &LiveCapture,
+        subscribers: &mut [Box<dyn LiveSubscriber>],
+        stop: &AtomicBool,
+        max_frames: Option<usize>,
+        latencies: &mut Vec<(usize, f64)>,
+        with_face: &mut usize,
+    ) -> Result<(), Error> {
+        let started = capture.started();
         while !stop.load(Ordering::SeqCst) && max_frames.is_none_or(|m| latencies.len() < m) {
             let Some(captured) = capture.next()? else {
                 break;
             };
             let result = self.reconstructor.process(&captured.frame)?;
-            with_face += usize::from(result.metrics.has_mesh());
+            *with_face += usize::from(result.metrics.has_mesh());
             let frame = LiveFrame {
                 result: &result,
                 captured_at: captured.captured_at,
@@ -98,22 +186,16 @@ impl LiveSession {
                     reason: format!("cannot send: {e}"),
                 })?;
             }
-            latencies.push(captured.captured_at.elapsed().as_secs_f64() * 1e3);
+            // The streams have it: the latency ends here, before the recording writes.
+            latencies.push((
+                captured.frame.index,
+                captured.captured_at.elapsed().as_secs_f64() * 1e3,
+            ));
+            if let Some(recording) = &mut self.recording {
+                recording.write(&result)?;
+            }
         }
-        let (captured, dropped) = capture.counts();
-        let elapsed = started.elapsed().as_secs_f64();
-        Ok(LiveSummary {
-            captured,
-            processed: latencies.len(),
-            dropped,
-            with_face,
-            latency: latency_figures(&mut latencies),
-            fps: if elapsed > 0.0 {
-                latencies.len() as f64 / elapsed
-            } else {
-                0.0
-            },
-        })
+        Ok(())
     }
 }
 
