@@ -113,7 +113,19 @@ enum Command {
 fn main() -> ExitCode {
     // A negative number is a value (`--fov-deg -5` is then refused by its range check, which
     // says why), not an unknown flag; clap does not pass this setting down by itself.
-    let command = Cli::command().mut_subcommands(|c| c.allow_negative_numbers(true));
+    let (lambda, mu) = commands::run::weight_help();
+    let command = Cli::command().mut_subcommands(|c| {
+        let c = c.allow_negative_numbers(true);
+        // The weights' help states the pipeline's defaults, from the constants themselves.
+        if c.get_arguments().any(|a| a.get_id() == "lambda") && c.get_name() != "eval" {
+            c.mut_arg("lambda", |a| {
+                a.help(lambda.clone()).long_help(lambda.clone())
+            })
+            .mut_arg("mu", |a| a.help(mu.clone()).long_help(mu.clone()))
+        } else {
+            c
+        }
+    });
     let cli = match Cli::from_arg_matches(&command.get_matches()) {
         Ok(cli) => cli,
         Err(e) => e.exit(),

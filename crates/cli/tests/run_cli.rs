@@ -1014,3 +1014,43 @@ fn another_person_filmed_alike_is_listed_as_a_cut() {
         m["summary"]
     );
 }
+
+/// `visage run --help` states the weights a run takes when none are given: the help is
+/// written from the pipeline's defaults, and a run's metrics.json records what it used.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files)),
+    ignore = "needs ../shared and the model files (scripts/setup.sh)"
+)]
+fn the_weights_help_states_the_defaults_a_run_takes() {
+    let models = visage_testdata::models_dir();
+    let portrait =
+        visage_testdata::require(visage_testdata::shared_dir().join("data/images/astronaut.png"));
+    let help = visage(&["run", "--help"]);
+    let help: String = String::from_utf8_lossy(&help.stdout)
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    run_ok(&[
+        "run",
+        s(&portrait),
+        "--out",
+        s(&out),
+        "--models",
+        s(&models),
+        "--quiet",
+    ]);
+    let weights = &json(&out.join("metrics.json"))["parameters"]["weights"];
+    let (lambda, mu) = (
+        weights["lambda"].as_f64().unwrap(),
+        weights["mu"].as_f64().unwrap(),
+    );
+    for stated in [
+        format!("λ (face and model meshes: mm⁴ of the template face, default {lambda} with the face or model depth"),
+        format!("μ (dimensionless; default {mu} with the face or model depth"),
+    ] {
+        assert!(help.contains(&stated), "{stated:?} not in: {help}");
+    }
+}

@@ -120,13 +120,10 @@ pub struct PipelineArgs {
     /// (millimetres, z; see --depth-scale), the i-th file for input frame i.
     #[arg(long, default_value = "face")]
     pub depth: String,
-    /// Smoothness weight λ (face and model meshes: mm⁴ of the template face, default 1
-    /// with the face or model depth, with depth maps 10 on the face mesh and 10³ on the
-    /// model mesh; image mesh: reference pixels⁴, default 10).
+    /// Smoothness weight λ ([`weight_help`] writes this help from the defaults).
     #[arg(long, allow_hyphen_values = true)]
     pub lambda: Option<f64>,
-    /// Temporal weight μ (dimensionless; default 0.5; with depth maps 1 on the face
-    /// mesh, 2 on the model mesh).
+    /// Temporal weight μ ([`weight_help`] writes this help from the defaults).
     #[arg(long, allow_hyphen_values = true)]
     pub mu: Option<f64>,
     /// The temporal model of the tracked landmarks: a constant-velocity Kalman filter with
@@ -229,6 +226,27 @@ pub enum FacesArg {
     Largest,
     /// Every face of the first frame that shows one.
     All,
+}
+
+/// The help of `--lambda` and `--mu`, written from the defaults the pipeline takes for each
+/// mesh and depth source, so that it cannot drift from them.
+pub fn weight_help() -> (String, String) {
+    use visage_fusion::MODEL_WEIGHTS_MAP as MODEL;
+    use visage_fusion::{ANCHORED_WEIGHTS_FACE as FACE, ANCHORED_WEIGHTS_MAP as MAP};
+    let image = visage_fem::Weights::default();
+    (
+        format!(
+            "Smoothness weight λ (face and model meshes: mm⁴ of the template face, default {} \
+             with the face or model depth, with depth maps {} on the face mesh and {} on the \
+             model mesh; image mesh: reference pixels⁴, default {})",
+            FACE.lambda, MAP.lambda, MODEL.lambda, image.lambda
+        ),
+        format!(
+            "Temporal weight μ (dimensionless; default {} with the face or model depth, with \
+             depth maps {} on the face mesh and {} on the model mesh; image mesh: default {})",
+            FACE.mu, MAP.mu, MODEL.mu, image.mu
+        ),
+    )
 }
 
 /// Takes the output folder for this run: refuses one another process writes into, or one
