@@ -26,9 +26,10 @@ pub const CUT_FACE_JUMP: f64 = 0.25;
 
 /// A face thumbnail difference (mean absolute, in units of the thumbnail's own standard
 /// deviation) above this is another face. Within a shot, frame to frame, the shared clips stay
-/// below 0.20 (talking, turning, blinking) and so do renders of a performer's whole range of
-/// expressions; two people filmed alike, one after the other, differ by 0.82.
-pub const CUT_FACE_CHANGE: f64 = 0.45;
+/// below 0.34 (lp_d13; lp_d18 0.24: talking, turning, blinking) and renders of a performer's
+/// whole range of expressions below 0.23; two people filmed alike, one after the other,
+/// differ by 0.99. The threshold sits between, 1.8 times the largest change within a shot.
+pub const CUT_FACE_CHANGE: f64 = 0.6;
 
 /// Face thumbnail side, cells.
 const FACE_THUMB: usize = 16;
