@@ -67,7 +67,8 @@ pub fn write_glb(
         .targets
         .iter()
         .map(|t| json::mesh::MorphTarget {
-            positions: Some(b.vec3(t, None)),
+            // Vertex data like the base positions: a viewer may upload it as an array buffer.
+            positions: Some(b.vec3(t, Some(json::buffer::Target::ArrayBuffer))),
             normals: None,
             tangents: None,
         })
