@@ -18,6 +18,9 @@ enum Arg {
     Str(String),
 }
 
+/// One decoded OSC message: its address and arguments.
+type Message = (String, Vec<Arg>);
+
 /// Reads an OSC string at `*at` (NUL-terminated, padded to 4).
 fn read_str(bytes: &[u8], at: &mut usize) -> String {
     let end = *at + bytes[*at..].iter().position(|&b| b == 0).unwrap();
@@ -59,25 +62,16 @@ fn decode(bytes: &[u8], out: &mut Vec<(String, Vec<Arg>)>) {
     out.push((address, args));
 }
 
-/// A clip played at its pace to a VMC receiver: every processed frame with a face arrives as
-/// OK, T, the 52 ARKit weights by name in [0, 1], then Apply; times increase; the closing line
-/// counts frames in, processed and dropped, and gives the latency.
-#[test]
-#[cfg_attr(
-    not(all(shared_data, model_files, ffmpeg)),
-    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
-)]
-fn a_clip_played_live_reaches_a_vmc_receiver_frame_by_frame() {
-    let (models, clip) = common::inputs();
+/// A UDP receiver on a free local port: its address, and the thread that decodes what it
+/// receives as OSC until nothing has come for 5 s.
+fn vmc_receiver() -> (String, std::thread::JoinHandle<Vec<Message>>) {
     let receiver = UdpSocket::bind("127.0.0.1:0").unwrap();
     receiver
         .set_read_timeout(Some(Duration::from_millis(200)))
         .unwrap();
     let target = receiver.local_addr().unwrap().to_string();
     let collect = std::thread::spawn(move || {
-        let mut messages = Vec::new();
-        let mut buffer = [0u8; 65536];
-        let mut idle = 0;
+        let (mut messages, mut buffer, mut idle) = (Vec::new(), [0u8; 65536], 0);
         while idle < 25 {
             match receiver.recv(&mut buffer) {
                 Ok(n) => {
@@ -89,6 +83,20 @@ fn a_clip_played_live_reaches_a_vmc_receiver_frame_by_frame() {
         }
         messages
     });
+    (target, collect)
+}
+
+/// A clip played at its pace to a VMC receiver: every processed frame with a face arrives as
+/// OK, T, the 52 ARKit weights by name in [0, 1], then Apply; times increase; the closing line
+/// counts frames in, processed and dropped, and gives the latency.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_clip_played_live_reaches_a_vmc_receiver_frame_by_frame() {
+    let (models, clip) = common::inputs();
+    let (target, collect) = vmc_receiver();
     let o = visage(&[
         "live",
         s(&clip),
@@ -218,23 +226,7 @@ fn live_link_packets_decode_in_a_real_client_as_the_same_weights() {
         &mut port,
     )
     .unwrap();
-    let vmc = UdpSocket::bind("127.0.0.1:0").unwrap();
-    vmc.set_read_timeout(Some(Duration::from_millis(200)))
-        .unwrap();
-    let vmc_target = vmc.local_addr().unwrap().to_string();
-    let collect = std::thread::spawn(move || {
-        let (mut messages, mut buffer, mut idle) = (Vec::new(), [0u8; 65536], 0);
-        while idle < 25 {
-            match vmc.recv(&mut buffer) {
-                Ok(n) => {
-                    idle = 0;
-                    decode(&buffer[..n], &mut messages);
-                }
-                Err(_) => idle += 1,
-            }
-        }
-        messages
-    });
+    let (vmc_target, collect) = vmc_receiver();
     let o = visage(&[
         "live",
         s(&clip),

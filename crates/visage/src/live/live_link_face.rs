@@ -15,61 +15,24 @@ use visage_rig::{ARKIT_BLENDSHAPES, LIVE_LINK_VALUE_COUNT};
 
 use super::session::{LiveFrame, LiveSubscriber};
 
-/// Unreal's `EARFaceBlendShape` order of the 52 blendshapes, by ARKit name.
-pub const UNREAL_ORDER: [&str; 52] = [
-    "eyeBlinkLeft",
-    "eyeLookDownLeft",
-    "eyeLookInLeft",
-    "eyeLookOutLeft",
-    "eyeLookUpLeft",
-    "eyeSquintLeft",
-    "eyeWideLeft",
-    "eyeBlinkRight",
-    "eyeLookDownRight",
-    "eyeLookInRight",
-    "eyeLookOutRight",
-    "eyeLookUpRight",
-    "eyeSquintRight",
-    "eyeWideRight",
-    "jawForward",
-    "jawLeft",
-    "jawRight",
-    "jawOpen",
-    "mouthClose",
-    "mouthFunnel",
-    "mouthPucker",
-    "mouthLeft",
-    "mouthRight",
-    "mouthSmileLeft",
-    "mouthSmileRight",
-    "mouthFrownLeft",
-    "mouthFrownRight",
-    "mouthDimpleLeft",
-    "mouthDimpleRight",
-    "mouthStretchLeft",
-    "mouthStretchRight",
-    "mouthRollLower",
-    "mouthRollUpper",
-    "mouthShrugLower",
-    "mouthShrugUpper",
-    "mouthPressLeft",
-    "mouthPressRight",
-    "mouthLowerDownLeft",
-    "mouthLowerDownRight",
-    "mouthUpperUpLeft",
-    "mouthUpperUpRight",
-    "browDownLeft",
-    "browDownRight",
-    "browInnerUp",
-    "browOuterUpLeft",
-    "browOuterUpRight",
-    "cheekPuff",
-    "cheekSquintLeft",
-    "cheekSquintRight",
-    "noseSneerLeft",
-    "noseSneerRight",
-    "tongueOut",
-];
+/// Where Unreal's `EARFaceBlendShape` order differs from [`ARKIT_BLENDSHAPES`]' (the app's
+/// CSV columns): each pair of names swaps places, the rest keep theirs.
+const UNREAL_SWAPS: [(&str, &str); 2] = [("jawRight", "jawLeft"), ("mouthRight", "mouthLeft")];
+
+/// `ARKIT_BLENDSHAPES`' index of each of Unreal's 52 blendshapes, in Unreal's order.
+pub fn unreal_order() -> [usize; 52] {
+    let index = |name: &str| {
+        ARKIT_BLENDSHAPES
+            .iter()
+            .position(|n| *n == name)
+            .expect("an ARKit name")
+    };
+    let mut order: [usize; 52] = std::array::from_fn(|i| i);
+    for (a, b) in UNREAL_SWAPS {
+        order.swap(index(a), index(b));
+    }
+    order
+}
 
 /// The packet version the app sends.
 const VERSION: u8 = 6;
@@ -86,7 +49,7 @@ pub struct LiveLinkFaceSender {
     target: String,
     device_id: String,
     subject: String,
-    /// `ARKIT_BLENDSHAPES`' index of each `UNREAL_ORDER` name.
+    /// [`unreal_order`].
     order: [usize; 52],
 }
 
@@ -106,12 +69,7 @@ impl LiveLinkFaceSender {
             "[::]:0"
         })?;
         socket.connect(address)?;
-        let order = std::array::from_fn(|i| {
-            ARKIT_BLENDSHAPES
-                .iter()
-                .position(|n| *n == UNREAL_ORDER[i])
-                .expect("the same 52 names")
-        });
+        let order = unreal_order();
         Ok(LiveLinkFaceSender {
             socket,
             target: target.to_owned(),
@@ -193,6 +151,15 @@ mod tests {
         assert_eq!(p[67], 61);
         let value = |k: usize| f32::from_be_bytes(p[68 + 4 * k..72 + 4 * k].try_into().unwrap());
         assert_eq!(value(15), 0.5, "JawLeft is Unreal's 16th value");
+        let names: Vec<&str> = unreal_order()
+            .iter()
+            .map(|&i| ARKIT_BLENDSHAPES[i])
+            .collect();
+        assert_eq!(
+            &names[14..18],
+            ["jawForward", "jawLeft", "jawRight", "jawOpen"]
+        );
+        assert_eq!(&names[21..23], ["mouthLeft", "mouthRight"]);
         assert_eq!(value(52), 0.25, "then the head's yaw");
         assert_eq!(p.len(), 68 + 4 * 61);
     }

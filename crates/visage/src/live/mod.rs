@@ -12,7 +12,7 @@ mod recording;
 mod session;
 mod vmc;
 
-pub use live_link_face::{LiveLinkFaceSender, DEFAULT_DEVICE_ID, UNREAL_ORDER};
+pub use live_link_face::{unreal_order, LiveLinkFaceSender, DEFAULT_DEVICE_ID};
 pub use recording::LiveRecording;
 pub use session::{LatencyFigures, LiveFrame, LiveSession, LiveSubscriber, LiveSummary};
 pub use vmc::VmcSender;
