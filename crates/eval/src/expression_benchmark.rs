@@ -18,8 +18,8 @@ use visage_rig::{live_link_rotation, ARKIT_BLENDSHAPES, ARKIT_BLENDSHAPE_COUNT};
 use crate::error::ClipRunError;
 use crate::expression_replay::{Replay, ReplayOptions};
 use crate::expression_scores::{
-    aligned_rms, mae, pearson, quantile_sorted, rest_frames, rigid_leak, rms, rotation_angle_deg,
-    BlinkCounts,
+    aligned_rms, from_rest, mae, pearson, quantile_sorted, rest_frames, rigid_leak, rms,
+    rotation_angle_deg, BlinkCounts,
 };
 use crate::head_render::HeadRender;
 use crate::EvalError;
@@ -46,6 +46,10 @@ pub struct ExpressionOptions {
 pub struct ShapeScore {
     /// Mean absolute error, weight units.
     pub mae: Option<f64>,
+    /// The same against the played weight relative to the take's resting value
+    /// ([`crate::expression_scores::from_rest`]): what a reading relative to the person's rest
+    /// — the pipeline's — can return.
+    pub mae_from_rest: Option<f64>,
     /// Pearson's r of read against played (`None` where either is constant).
     pub r: Option<f64>,
     /// The 99th percentile of this weight's change over the frames at rest
@@ -59,6 +63,9 @@ pub struct ExpressionSummary {
     /// Mean over the 51 shapes with an ICT counterpart (not `tongueOut`) of each shape's MAE,
     /// over the frames with a face.
     pub mae: Option<f64>,
+    /// The same against the played weights relative to each take's resting values
+    /// ([`ShapeScore::mae_from_rest`]).
+    pub mae_from_rest: Option<f64>,
     /// Blinks caught: runs of frames with a played `eyeBlink*` ≥ 0.8 in which the read one
     /// reaches 0.6 (both eyes).
     pub blink_hit_rate: Option<f64>,
@@ -107,6 +114,8 @@ pub struct TakeResult {
 pub struct Curves {
     pub time_s: Vec<f64>,
     pub played: Vec<[f32; ARKIT_BLENDSHAPE_COUNT]>,
+    /// The played weights relative to the take's resting values (`from_rest`).
+    pub played_from_rest: Vec<[f32; ARKIT_BLENDSHAPE_COUNT]>,
     pub read: Vec<[f32; ARKIT_BLENDSHAPE_COUNT]>,
     /// Live Link Face's head yaw, pitch and roll (radians), played and read.
     pub played_head: Vec<[f64; 3]>,
@@ -156,6 +165,7 @@ pub fn evaluate_expressions(
     for t in &results {
         all.time_s.extend(&t.curves.time_s);
         all.played.extend(&t.curves.played);
+        all.played_from_rest.extend(&t.curves.played_from_rest);
         all.read.extend(&t.curves.read);
         all.played_head.extend(&t.curves.played_head);
         all.read_head.extend(&t.curves.read_head);
@@ -182,7 +192,8 @@ pub fn evaluate_expressions(
             .reduce(f64::max);
     }
     let summary = ExpressionSummary {
-        mae: mean_mae(&shapes),
+        mae: mean_mae(&shapes, |s| s.mae),
+        mae_from_rest: mean_mae(&shapes, |s| s.mae_from_rest),
         blink_hit_rate: blinks.hit_rate(),
         false_closure_rate: blinks.false_closure_rate(),
         blinks,
@@ -291,6 +302,7 @@ fn evaluate_take(
         .zip(&played_poses)
         .map(|(r, p)| rotation_angle_deg(r, p))
         .collect();
+    curves.played_from_rest = from_rest(&curves.played);
     let rest = rest_frames(&curves.played);
     let leak = rigid_leak(&curves.played, &curves.read, &rest);
     let identity_error_mm = match &outcome.identity {
@@ -300,7 +312,8 @@ fn evaluate_take(
     let shapes = shape_scores(&curves, Some(&rest));
     let blinks = blink_counts(&curves);
     let summary = ExpressionSummary {
-        mae: mean_mae(&shapes),
+        mae: mean_mae(&shapes, |s| s.mae),
+        mae_from_rest: mean_mae(&shapes, |s| s.mae_from_rest),
         blink_hit_rate: blinks.hit_rate(),
         false_closure_rate: blinks.false_closure_rate(),
         blinks,
@@ -337,6 +350,7 @@ fn shape_scores(curves: &Curves, rest: Option<&[usize]>) -> BTreeMap<String, Sha
         .map(|(w, name)| {
             let played: Vec<f32> = curves.played.iter().map(|p| p[w]).collect();
             let read: Vec<f32> = curves.read.iter().map(|p| p[w]).collect();
+            let relative: Vec<f32> = curves.played_from_rest.iter().map(|p| p[w]).collect();
             let leak_p99 = rest.and_then(|rest| {
                 let one = |v: &[f32]| v.iter().map(|&x| [x]).collect::<Vec<[f32; 1]>>();
                 let leak = rigid_leak(&one(&played), &one(&read), rest);
@@ -346,6 +360,7 @@ fn shape_scores(curves: &Curves, rest: Option<&[usize]>) -> BTreeMap<String, Sha
                 name.to_string(),
                 ShapeScore {
                     mae: mae(&played, &read),
+                    mae_from_rest: mae(&relative, &read),
                     r: pearson(&played, &read),
                     leak_p99,
                 },
@@ -355,11 +370,14 @@ fn shape_scores(curves: &Curves, rest: Option<&[usize]>) -> BTreeMap<String, Sha
 }
 
 /// The mean of the shapes' MAE, `tongueOut` left out (neither ICT nor the pipeline has it).
-fn mean_mae(shapes: &BTreeMap<String, ShapeScore>) -> Option<f64> {
+fn mean_mae(
+    shapes: &BTreeMap<String, ShapeScore>,
+    of: fn(&ShapeScore) -> Option<f64>,
+) -> Option<f64> {
     let v: Vec<f64> = shapes
         .iter()
         .filter(|(name, _)| *name != "tongueOut")
-        .filter_map(|(_, s)| s.mae)
+        .filter_map(|(_, s)| of(s))
         .collect();
     (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
 }

@@ -64,16 +64,21 @@ pub fn write_expression_results(out: &Path, results: &ExpressionResults) -> Resu
             };
             let score = &take.shapes[*name];
             let title = format!(
-                "{} — {name}: MAE {}, r {}",
+                "{} — {name}: MAE {} (from rest {}), r {}",
                 take.take,
                 fmt(score.mae, 3),
+                fmt(score.mae_from_rest, 3),
                 fmt(score.r, 2)
             );
             let svg = xy_chart_svg(
                 &title,
                 "time (s)",
                 "weight",
-                &[series("played", &c.played), series("read", &c.read)],
+                &[
+                    series("played", &c.played),
+                    series("played from rest", &c.played_from_rest),
+                    series("read", &c.read),
+                ],
             );
             write(&dir.join(format!("{name}.svg")), &svg)?;
         }
@@ -121,17 +126,28 @@ pub fn expression_table(results: &ExpressionResults) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:<28} {:>6} {:>6} {:>7} {:>6} {:>7} {:>8} {:>7} {:>6} {:>8}",
-        "take", "frames", "faces", "MAE", "blink", "false", "leak p99", "rot°", "id mm", "ms/frame"
+        "{:<28} {:>6} {:>6} {:>7} {:>8} {:>6} {:>7} {:>8} {:>7} {:>6} {:>8}",
+        "take",
+        "frames",
+        "faces",
+        "MAE",
+        "MAE rest",
+        "blink",
+        "false",
+        "leak p99",
+        "rot°",
+        "id mm",
+        "ms/frame"
     );
     let row = |s: &mut String, name: &str, m: &ExpressionSummary| {
         let _ = writeln!(
             s,
-            "{:<28} {:>6} {:>6} {:>7} {:>6} {:>7} {:>8} {:>7} {:>6} {:>8.1}",
+            "{:<28} {:>6} {:>6} {:>7} {:>8} {:>6} {:>7} {:>8} {:>7} {:>6} {:>8.1}",
             name,
             m.frames,
             m.frames_with_face,
             fmt(m.mae, 4),
+            fmt(m.mae_from_rest, 4),
             fmt(m.blink_hit_rate, 2),
             fmt(m.false_closure_rate, 4),
             fmt(m.rigid_leak_p99, 3),
@@ -144,6 +160,10 @@ pub fn expression_table(results: &ExpressionResults) -> String {
         row(&mut s, &t.take, &t.summary);
     }
     row(&mut s, "all", &results.summary);
+    let _ = writeln!(
+        s,
+        "(MAE rest: against the played weights relative to the take's resting values)"
+    );
     if let Some((name, v)) = &results.summary.rigid_leak_worst {
         let _ = writeln!(s, "largest leak: {name} (p99 {v:.3})");
     }

@@ -122,16 +122,39 @@ impl BlinkCounts {
     }
 }
 
-/// The frames at rest: every played weight within [`REST_TOLERANCE`] of its resting value
-/// (its [`REST_QUANTILE`] over the frames). `played[f]` is frame f's weights.
-pub fn rest_frames<const N: usize>(played: &[[f32; N]]) -> Vec<usize> {
-    let rest: Vec<f32> = (0..N)
-        .map(|w| {
-            let mut v: Vec<f32> = played.iter().map(|p| p[w]).collect();
-            v.sort_by(f32::total_cmp);
-            quantile_sorted(&v, REST_QUANTILE)
+/// Each played weight's resting value: its [`REST_QUANTILE`] over the frames. `played[f]` is
+/// frame f's weights.
+pub fn resting_values<const N: usize>(played: &[[f32; N]]) -> [f32; N] {
+    std::array::from_fn(|w| {
+        let mut v: Vec<f32> = played.iter().map(|p| p[w]).collect();
+        v.sort_by(f32::total_cmp);
+        quantile_sorted(&v, REST_QUANTILE)
+    })
+}
+
+/// The played weights relative to the performer's resting face, as the pipeline reads a face
+/// (weights relative to the person's rest): `(w − rest) / (1 − rest)` clamped to [0, 1], with
+/// `rest` the weight's [`resting_values`]. A recorded take rests away from 0 where the
+/// performer's face differs from ARKit's neutral (`browDown` ≈ 0.46 on `jmtechart_MySlate_3`)
+/// — the performer's identity as ARKit reads it, which no reading relative to the rest
+/// returns.
+pub fn from_rest<const N: usize>(played: &[[f32; N]]) -> Vec<[f32; N]> {
+    let rest = resting_values(played);
+    played
+        .iter()
+        .map(|p| {
+            std::array::from_fn(|w| {
+                let span = (1.0 - rest[w]).max(f32::EPSILON);
+                ((p[w] - rest[w]) / span).clamp(0.0, 1.0)
+            })
         })
-        .collect();
+        .collect()
+}
+
+/// The frames at rest: every played weight within [`REST_TOLERANCE`] of its resting value
+/// ([`resting_values`]). `played[f]` is frame f's weights.
+pub fn rest_frames<const N: usize>(played: &[[f32; N]]) -> Vec<usize> {
+    let rest = resting_values(played);
     (0..played.len())
         .filter(|&f| (0..N).all(|w| (played[f][w] - rest[w]).abs() <= REST_TOLERANCE))
         .collect()
@@ -285,6 +308,21 @@ mod tests {
         let mut moving = played.clone();
         moving[3][0] = 0.5;
         assert_eq!(rest_frames(&moving), vec![0, 1, 2, 4, 5]);
+    }
+
+    #[test]
+    fn played_weights_from_the_rest_of_the_take() {
+        // Weight 0 rests at 0.4 and peaks at 1; weight 1 rests at 0 and dips nowhere.
+        let played = [[0.4, 0.0], [0.4, 0.5], [0.7, 0.0], [1.0, 0.0], [0.2, 0.0]];
+        assert_eq!(resting_values(&played), [0.4, 0.0]);
+        let relative = from_rest(&played);
+        let expect = [[0.0, 0.0], [0.0, 0.5], [0.5, 0.0], [1.0, 0.0], [0.0, 0.0]];
+        for (r, e) in relative.iter().zip(&expect) {
+            assert!(
+                (r[0] - e[0]).abs() < 1e-6 && (r[1] - e[1]).abs() < 1e-6,
+                "{r:?} {e:?}"
+            );
+        }
     }
 
     #[test]

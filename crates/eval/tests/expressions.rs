@@ -76,6 +76,8 @@ fn a_take_replayed_on_a_rendered_head_is_read_frame_by_frame() {
     assert!(identity < 10.0, "identity error {identity} mm");
     let mae = s.mae.unwrap();
     assert!(mae < 0.3, "mean absolute error {mae}");
+    let from_rest = s.mae_from_rest.unwrap();
+    assert!(from_rest < 0.3, "mean absolute error from rest {from_rest}");
 
     let out = tempfile::tempdir().unwrap();
     write_expression_results(out.path(), &results).unwrap();
@@ -84,6 +86,7 @@ fn a_take_replayed_on_a_rendered_head_is_read_frame_by_frame() {
             .unwrap();
     for field in [
         "mae",
+        "mae_from_rest",
         "blink_hit_rate",
         "false_closure_rate",
         "rigid_leak_p99",
@@ -97,6 +100,7 @@ fn a_take_replayed_on_a_rendered_head_is_read_frame_by_frame() {
     }
     let jaw = &json["takes"][0]["shapes"]["jawOpen"];
     assert!(jaw["mae"].is_number() && jaw.get("r").is_some(), "{jaw}");
+    assert!(jaw["mae_from_rest"].is_number(), "{jaw}");
     let plot: PathBuf = out.path().join("plots/alex_rom_3/jawOpen.svg");
     assert!(std::fs::read_to_string(plot).unwrap().starts_with("<svg"));
 }
