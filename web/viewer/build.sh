@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Build the report viewer bundle: web/viewer/dist/viewer.js (one classic script,
-# three.js included) for the Rust exporter to inline into report.html.
+# Build the viewer bundles: web/viewer/dist/viewer.js (one classic script, three.js
+# included) for the Rust exporter to inline into report.html, and dist/live.js, the
+# script of the page `visage live --listen` serves.
 # Runs `npm ci` only when node_modules is missing or package-lock.json changed
 # since the last successful install (sha256 stamp kept inside node_modules).
 set -euo pipefail
@@ -16,4 +17,5 @@ fi
 
 npm run --silent build
 test -s dist/viewer.js
+test -s dist/live.js
 echo "$(pwd)/dist/viewer.js"

@@ -327,3 +327,142 @@ fn a_recorded_session_is_a_run_folder_that_exports() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("not empty"), "{err}");
 }
+
+/// The closing line's count of processed frames.
+fn processed(err: &str) -> usize {
+    err.split(" processed")
+        .next()
+        .and_then(|s| s.rsplit(", ").next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{err}"))
+}
+
+/// A free UDP port on the loopback address.
+fn free_udp_port() -> u16 {
+    UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+/// FFmpeg serves the sample clip as MPEG-TS over UDP at its own pace; `visage live udp://…`
+/// processes it as it comes and ends when the stream goes quiet, cleanly.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_network_stream_is_processed_to_its_end() {
+    let (models, clip) = common::inputs();
+    let url = format!("udp://127.0.0.1:{}", free_udp_port());
+    let live = std::process::Command::new(env!("CARGO_BIN_EXE_visage"))
+        .args(["live", &url, "--idle-end", "2", "--models", s(&models)])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // FFmpeg in `visage live` listens within a moment; the sender starts after it.
+    std::thread::sleep(Duration::from_secs(2));
+    let sent = std::process::Command::new("ffmpeg")
+        .args([
+            "-v",
+            "error",
+            "-re",
+            "-i",
+            s(&clip),
+            "-c",
+            "copy",
+            "-f",
+            "mpegts",
+        ])
+        .arg(format!("{url}?pkt_size=1316"))
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let o = live.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("no frame for 2 s: the stream is over"),
+        "{err}"
+    );
+    // 216 frames sent; FFmpeg's look at the stream's start gives its first frames at once, and
+    // the newest wins.
+    let n = processed(&err);
+    assert!(n >= 150, "{n} frames processed: {err}");
+}
+
+/// `visage live --listen` serves its page: in headless Chromium the face's canvas changes from
+/// one second to the next and the page reports the frame rate and latency; a page of another
+/// origin asking for the socket is refused. The clip is streamed through standard input in a
+/// loop, so the page is checked while frames still come; Ctrl-C ends the session.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg, web_tools)),
+    ignore = "needs ../shared, the model files, FFmpeg and web/viewer built (scripts/setup.sh)"
+)]
+fn the_live_page_shows_the_face_moving_and_refuses_other_origins() {
+    use std::io::BufRead;
+    use std::process::{Command, Stdio};
+    let (models, clip) = common::inputs();
+    let mut feed = Command::new("ffmpeg")
+        .args(["-v", "error", "-re", "-stream_loop", "-1", "-i", s(&clip)])
+        .args(["-an", "-c:v", "mjpeg", "-q:v", "3", "-f", "nut", "pipe:1"])
+        .stdout(Stdio::piped())
+        // It says "Broken pipe" when the session ends first.
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut live = Command::new(env!("CARGO_BIN_EXE_visage"))
+        .args([
+            "live",
+            "-",
+            "--listen",
+            "127.0.0.1:0",
+            "--models",
+            s(&models),
+        ])
+        .stdin(feed.stdout.take().unwrap())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = std::io::BufReader::new(live.stderr.take().unwrap());
+    let mut line = String::new();
+    let url = loop {
+        line.clear();
+        assert!(stderr.read_line(&mut line).unwrap() > 0, "no page address");
+        if let Some(url) = line.trim().strip_prefix("the live page: ") {
+            break url.to_owned();
+        }
+    };
+    let port = url.trim_end_matches('/').rsplit(':').next().unwrap();
+    let other = format!("http://localhost:{port}/");
+    let artefacts = visage_testdata::workspace_root().join("target/test-artifacts");
+    std::fs::create_dir_all(&artefacts).unwrap();
+    let shot = artefacts.join("live-page.png");
+    let check = Command::new("node")
+        .arg(visage_testdata::web_dir().join("test/check_live.mjs"))
+        .args([&url, &other, s(&shot)])
+        .output()
+        .unwrap();
+    let _ = Command::new("kill")
+        .args(["-INT", &live.id().to_string()])
+        .status();
+    let mut rest = String::new();
+    let _ = std::io::Read::read_to_string(&mut stderr, &mut rest);
+    let status = live.wait().unwrap();
+    let _ = feed.kill();
+    let _ = feed.wait();
+    let report = String::from_utf8_lossy(&check.stdout);
+    assert!(
+        check.status.success(),
+        "{report}{}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_str(report.trim()).unwrap();
+    assert_eq!(json["crossOrigin"], "refused", "{json}");
+    assert!(json["fps"].as_f64().unwrap() > 0.0, "{json}");
+    assert!(json["difference"].as_f64().unwrap() > 0.2, "{json}");
+    assert!(status.success(), "{rest}");
+    assert!(rest.contains("sent the live page at"), "{rest}");
+}

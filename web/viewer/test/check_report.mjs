@@ -5,6 +5,7 @@
 import { resolve } from 'node:path';
 import { pathToFileURL } from 'node:url';
 import { chromium } from 'playwright-core';
+import { CHROMIUM_ARGS } from './chromium.mjs';
 
 // Luminance variance of the frame at t=0 (0-255 scale). A canvas cleared to the
 // flat background gives exactly 0; the test fixture gives ~830, and a face over
@@ -17,19 +18,6 @@ const MIN_VARIANCE = 25;
 // pixels, giving several levels. 0.5 means "clearly more than noise".
 const MIN_DIFFERENCE = 0.5;
 const READY_TIMEOUT_MS = 60_000;
-
-export const CHROMIUM_ARGS = [
-  '--headless',
-  '--no-sandbox', // running as root in a container
-  '--disable-gpu', // no GPU here: WebGL comes from SwiftShader instead
-  '--use-angle=swiftshader', // ANGLE on the SwiftShader CPU backend
-  '--enable-unsafe-swiftshader', // Chromium ≥ 139 refuses SwiftShader WebGL without it
-  '--disable-quic',
-  '--no-first-run',
-  '--disable-background-networking',
-  '--disable-component-update',
-  '--disable-sync',
-];
 
 const [reportPath, screenshotPath, screenshotMode] = process.argv.slice(2);
 // 'viewport': only the first screenful (for the README); default: the whole page.

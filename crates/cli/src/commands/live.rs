@@ -2,18 +2,23 @@
 //! frame by frame as it arrives and streamed out while it happens. A command of its own rather
 //! than `visage run --live`: it is causal only, drops frames rather than queue them when it
 //! falls behind, runs until the source ends or Ctrl-C, and its outputs are streams: the VMC
-//! protocol (VTuber apps) and Live Link Face's packets (Unreal).
+//! protocol (VTuber apps), Live Link Face's packets (Unreal) and a web page.
 
 use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
 use indicatif::ProgressBar;
-use visage::live::{LiveFrame, LiveLinkFaceSender, LiveSession, LiveSubscriber, VmcSender};
+use visage::live::{
+    LiveFrame, LiveLinkFaceSender, LivePage, LiveSession, LiveSubscriber, VmcSender,
+};
 use visage::{check_fov, Camera, Reconstructor};
 use visage_video::{LiveCapture, LiveOptions};
 
 use crate::interrupt;
+
+/// Seconds without a frame after which a network stream is over, unless `--idle-end` says.
+const DEFAULT_NETWORK_IDLE_END_S: f64 = 5.0;
 
 /// `visage live`'s flags.
 #[derive(Args, Debug)]
@@ -41,6 +46,18 @@ pub struct LiveArgs {
     /// The Live Link device id (the app sends a 36-character UUID).
     #[arg(long, default_value = visage::live::DEFAULT_DEVICE_ID, requires = "live_link")]
     pub device_id: String,
+    /// Serve a web page showing the face mesh, head motion, a few curves, the frame rate and
+    /// the latency as they happen, on ADDRESS (`HOST:PORT`, or a port alone for 127.0.0.1;
+    /// nothing is served without it). It serves only its own page, answers only to that
+    /// address, and refuses WebSocket requests from pages of other origins; binding to an
+    /// address other machines reach shows them the face.
+    #[arg(long, value_name = "ADDRESS")]
+    pub listen: Option<String>,
+    /// End the session when the source has sent no frame for this many seconds after its
+    /// first: a network stream has no end of its own, its sender just stops (default: 5 for a
+    /// network stream, never for a camera, a file or standard input; 0: never).
+    #[arg(long, value_name = "SECONDS")]
+    pub idle_end: Option<f64>,
     /// Horizontal field of view of the camera, degrees (default: as `visage run`).
     #[arg(long)]
     pub fov_deg: Option<f64>,
@@ -78,8 +95,26 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
             .with_context(|| format!("--live-link {target}"))?;
         subscribers.push(Box::new(sender));
     }
+    if let Some(address) = &args.listen {
+        let page = LivePage::bind(address).with_context(|| format!("--listen {address}"))?;
+        if !args.quiet {
+            eprintln!("the live page: {}", page.url());
+        }
+        subscribers.push(Box::new(page));
+    }
+    let idle_end = match args.idle_end {
+        Some(s) if !(s.is_finite() && s >= 0.0) => {
+            anyhow::bail!("--idle-end {s}: a number of seconds, 0 or more")
+        }
+        Some(s) => (s > 0.0).then(|| std::time::Duration::from_secs_f64(s)),
+        None => args
+            .source
+            .contains("://")
+            .then(|| std::time::Duration::from_secs_f64(DEFAULT_NETWORK_IDLE_END_S)),
+    };
     let options = LiveOptions {
         realtime: args.realtime,
+        idle_end,
     };
     let capture = LiveCapture::open(&args.source, &options)?;
     let (width, height) = capture.size();
@@ -107,6 +142,13 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
     let summary = session.run(&capture, &mut subscribers, &stop, args.max_frames);
     bar.finish_and_clear();
     subscribers.truncate(streams);
+    if capture.went_quiet() && !args.quiet {
+        eprintln!(
+            "{}: no frame for {:.0} s: the stream is over",
+            args.source,
+            idle_end.map_or(0.0, |d| d.as_secs_f64())
+        );
+    }
     if !args.quiet {
         let to: Vec<String> = subscribers.iter().map(|s| s.describe()).collect();
         eprintln!(
@@ -122,7 +164,8 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
             summary.latency.p95_ms,
             match (to.is_empty(), &args.out) {
                 (true, None) =>
-                    "; nothing streamed or recorded (--vmc, --live-link, --out)".to_owned(),
+                    "; nothing streamed or recorded (--vmc, --live-link, --listen, --out)"
+                        .to_owned(),
                 (true, Some(dir)) => format!("; recorded into {}", dir.display()),
                 (false, None) => format!("; sent {}", to.join(", ")),
                 (false, Some(dir)) => {

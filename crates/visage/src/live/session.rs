@@ -51,7 +51,8 @@ pub struct LiveSummary {
     /// Processed frames with a face.
     pub with_face: usize,
     pub latency: LatencyFigures,
-    /// Processed frames per second of the session.
+    /// Processed frames per second while frames came: over the time from the first processed
+    /// frame's capture to the last one's (not the wait for a source to start or to go quiet).
     pub fps: f64,
 }
 
@@ -62,6 +63,8 @@ pub struct LiveSession {
     started: Instant,
     cpu_at_start: Option<f64>,
     latencies_ms: Vec<(usize, f64)>,
+    /// When the first and the last processed frames were captured.
+    span: Option<(Instant, Instant)>,
     /// What stopped [`LiveSession::run`], given back by [`LiveSession::finish`].
     error: Option<Error>,
 }
@@ -75,6 +78,7 @@ impl LiveSession {
             started: Instant::now(),
             cpu_at_start: crate::process_stats::cpu_seconds(),
             latencies_ms: Vec::new(),
+            span: None,
             error: None,
         }
     }
@@ -103,6 +107,7 @@ impl LiveSession {
             cpu_at_start,
             latencies_ms,
             error,
+            ..
         } = self;
         let Some(recording) = recording else {
             return error.map_or(Ok(()), Err);
@@ -140,7 +145,6 @@ impl LiveSession {
             self.error = Some(e);
         }
         let (captured, dropped) = capture.counts();
-        let elapsed = capture.started().elapsed().as_secs_f64();
         let mut ms: Vec<f64> = latencies.iter().map(|l| l.1).collect();
         let summary = LiveSummary {
             captured,
@@ -148,10 +152,11 @@ impl LiveSession {
             dropped,
             with_face,
             latency: latency_figures(&mut ms),
-            fps: if elapsed > 0.0 {
-                latencies.len() as f64 / elapsed
-            } else {
-                0.0
+            fps: match self.span {
+                Some((first, last)) if last > first => {
+                    (latencies.len() - 1) as f64 / last.duration_since(first).as_secs_f64()
+                }
+                _ => 0.0,
             },
         };
         self.latencies_ms = latencies;
@@ -174,6 +179,8 @@ impl LiveSession {
                 break;
             };
             let result = self.reconstructor.process(&captured.frame)?;
+            let first = self.span.map_or(captured.captured_at, |s| s.0);
+            self.span = Some((first, captured.captured_at));
             *with_face += usize::from(result.metrics.has_mesh());
             let frame = LiveFrame {
                 result: &result,
