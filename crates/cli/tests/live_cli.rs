@@ -466,3 +466,58 @@ fn the_live_page_shows_the_face_moving_and_refuses_other_origins() {
     assert!(status.success(), "{rest}");
     assert!(rest.contains("sent the live page at"), "{rest}");
 }
+
+/// `--vmc-bones`: before each frame's weights, the `Head`, `LeftEye` and `RightEye` bones as
+/// unit quaternions; the sample's speaker looks down at the camera's lens (the fit reads a head
+/// pitch of about 11°), which Unity's frame makes a positive rotation about x.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn vmc_bones_carry_the_heads_rotation_in_unitys_frame() {
+    let (models, clip) = common::inputs();
+    let (target, collect) = vmc_receiver();
+    let o = visage(&[
+        "live",
+        s(&clip),
+        "--realtime",
+        "--vmc",
+        &target,
+        "--vmc-bones",
+        "--max-frames",
+        "20",
+        "--models",
+        s(&models),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let messages = collect.join().unwrap();
+    let bones: Vec<&(String, Vec<Arg>)> = messages
+        .iter()
+        .filter(|(a, _)| a == "/VMC/Ext/Bone/Pos")
+        .collect();
+    assert_eq!(bones.len(), 3 * 20, "three bones a frame");
+    let mut head_x = Vec::new();
+    for (i, (_, args)) in bones.iter().enumerate() {
+        let Arg::Str(name) = &args[0] else {
+            panic!("{args:?}")
+        };
+        assert_eq!(name, ["Head", "LeftEye", "RightEye"][i % 3]);
+        let q: Vec<f32> = args[4..8]
+            .iter()
+            .map(|a| match a {
+                Arg::Float(v) => *v,
+                other => panic!("{other:?}"),
+            })
+            .collect();
+        let norm = q.iter().map(|v| v * v).sum::<f32>().sqrt();
+        assert!((norm - 1.0).abs() < 1e-4, "{q:?}");
+        if name == "Head" {
+            head_x.push(q[0] * q[3].signum());
+        }
+    }
+    head_x.sort_by(f32::total_cmp);
+    let median = head_x[head_x.len() / 2];
+    // sin(11° / 2) ≈ 0.096.
+    assert!((0.03..0.2).contains(&median), "{head_x:?}");
+}

@@ -36,6 +36,11 @@ pub struct LiveArgs {
     /// Warudo, VNyan and VMagicMirror listen on 39539 by default).
     #[arg(long, value_name = "HOST:PORT")]
     pub vmc: Option<String>,
+    /// With --vmc: also send the head's and the eyes' rotations as the `Head`, `LeftEye` and
+    /// `RightEye` bones (local rotations in Unity's frame, the subject's own sides; the
+    /// position is 0, so the receiver must take only the rotation).
+    #[arg(long, requires = "vmc")]
+    pub vmc_bones: bool,
     /// Send Live Link Face's UDP packets (what Unreal's Live Link receives from the iPhone app)
     /// to HOST:PORT (Unreal listens on 11111).
     #[arg(long, value_name = "HOST:PORT")]
@@ -87,7 +92,9 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
     }
     let mut subscribers: Vec<Box<dyn LiveSubscriber>> = Vec::new();
     if let Some(target) = &args.vmc {
-        let sender = VmcSender::new(target).with_context(|| format!("--vmc {target}"))?;
+        let sender = VmcSender::new(target)
+            .with_context(|| format!("--vmc {target}"))?
+            .with_bones(args.vmc_bones);
         subscribers.push(Box::new(sender));
     }
     if let Some(target) = &args.live_link {
