@@ -80,13 +80,14 @@ if ! "$venv/bin/kubernetes-validate" --version >/dev/null 2>&1; then
   "$venv/bin/pip" install -q --no-cache-dir kubernetes-validate==1.37.0
 fi
 
-# A real Live Link Face client for `visage live --live-link`'s test: the PyPI package
-# pylivelinkface, which decodes the iPhone app's packets, pinned, in a virtual environment
-# under the build folder.
+# Real clients for `visage live`'s tests: the PyPI packages pylivelinkface, which decodes the
+# iPhone app's Live Link packets, and python-osc (the VMC protocol's OSC), pinned, in a virtual
+# environment under the build folder.
 live_venv="$target_dir/live-venv"
-if ! "$live_venv/bin/python" -c "import pylivelinkface" >/dev/null 2>&1; then
+if ! "$live_venv/bin/python" -c "import pylivelinkface, pythonosc" >/dev/null 2>&1; then
   python3 -m venv "$live_venv"
-  "$live_venv/bin/pip" install -q --no-cache-dir pylivelinkface==0.1 timecode==1.5.1 numpy==2.4.6
+  "$live_venv/bin/pip" install -q --no-cache-dir pylivelinkface==0.1 timecode==1.5.1 numpy==2.4.6 \
+    python-osc==1.10.2
 fi
 
 [ "$mode" = ci ] && exit 0

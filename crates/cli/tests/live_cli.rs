@@ -173,16 +173,15 @@ fn a_source_that_cannot_be_opened_is_exit_2_naming_it() {
     );
 }
 
-/// Both streams at once, to two receivers: Live Link Face's packets decoded by a real client
-/// (the PyPI package `pylivelinkface`, which reads the iPhone app's packets; set up by
-/// `scripts/setup.sh` in `target/live-venv`), frame by frame equal, name by name, to the
-/// VMC stream's weights — so every blendshape lands in the slot Unreal reads under its name.
+/// Real clients from PyPI while the sample clip plays at its pace: `pylivelinkface` decodes
+/// the Live Link packets and `python-osc` the VMC bundles; both carry, frame by frame, the
+/// weights of the same frames' rows in `blendshapes.csv` of the session's own recording.
 #[test]
 #[cfg_attr(
     not(all(shared_data, model_files, ffmpeg)),
     ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
 )]
-fn live_link_packets_decode_in_a_real_client_as_the_same_weights() {
+fn real_clients_decode_the_streams_as_the_recorded_weights() {
     let target_dir = std::env::var_os("CARGO_TARGET_DIR")
         .map(std::path::PathBuf::from)
         .unwrap_or_else(|| visage_testdata::workspace_root().join("target"));
@@ -202,31 +201,43 @@ fn live_link_packets_decode_in_a_real_client_as_the_same_weights() {
     let (models, clip) = common::inputs();
     let tmp = tempfile::tempdir().unwrap();
     let decoded = tmp.path().join("decoded.json");
-    let client = "import socket, sys, json\n\
+    let take = tmp.path().join("take");
+    // Two sockets, one per stream; each datagram decoded by its client package.
+    let client = "import socket, sys, json, select\n\
         from pylivelinkface import PyLiveLinkFace, FaceBlendShape\n\
-        s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM); s.bind(('127.0.0.1', 0))\n\
-        s.settimeout(5); print(s.getsockname()[1], flush=True)\n\
-        out = []\n\
+        from pythonosc.osc_packet import OscPacket\n\
+        llf = socket.socket(socket.AF_INET, socket.SOCK_DGRAM); llf.bind(('127.0.0.1', 0))\n\
+        vmc = socket.socket(socket.AF_INET, socket.SOCK_DGRAM); vmc.bind(('127.0.0.1', 0))\n\
+        print(llf.getsockname()[1], vmc.getsockname()[1], flush=True)\n\
+        packets, frames, current = [], [], []\n\
         while True:\n\
-        \x20   try: data, _ = s.recvfrom(4096)\n\
-        \x20   except socket.timeout: break\n\
-        \x20   ok, face = PyLiveLinkFace.decode(data)\n\
-        \x20   out.append({'ok': ok, 'name': face.name, 'uuid': face.uuid, 'fps': face.fps,\n\
-        \x20               'shapes': {b.name: face.get_blendshape(b) for b in FaceBlendShape}})\n\
-        json.dump(out, open(sys.argv[1], 'w'))\n";
+        \x20   ready, _, _ = select.select([llf, vmc], [], [], 5)\n\
+        \x20   if not ready: break\n\
+        \x20   for s in ready:\n\
+        \x20       data, _ = s.recvfrom(65536)\n\
+        \x20       if s is llf:\n\
+        \x20           ok, face = PyLiveLinkFace.decode(data)\n\
+        \x20           packets.append({'ok': ok, 'name': face.name, 'uuid': face.uuid, 'fps': face.fps,\n\
+        \x20                           'shapes': {b.name: face.get_blendshape(b) for b in FaceBlendShape}})\n\
+        \x20           continue\n\
+        \x20       for m in OscPacket(data).messages:\n\
+        \x20           m = m.message\n\
+        \x20           if m.address == '/VMC/Ext/Blend/Val': current.append([m.params[0], m.params[1]])\n\
+        \x20           elif m.address == '/VMC/Ext/Blend/Apply': frames.append(current); current = []\n\
+        json.dump({'packets': packets, 'vmc': frames}, open(sys.argv[1], 'w'))\n";
     let mut receiver = std::process::Command::new(&python)
         .args(["-c", client])
         .arg(&decoded)
         .stdout(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let mut port = String::new();
+    let mut ports = String::new();
     std::io::BufRead::read_line(
         &mut std::io::BufReader::new(receiver.stdout.take().unwrap()),
-        &mut port,
+        &mut ports,
     )
     .unwrap();
-    let (vmc_target, collect) = vmc_receiver();
+    let ports: Vec<&str> = ports.split_whitespace().collect();
     let o = visage(&[
         "live",
         s(&clip),
@@ -234,36 +245,31 @@ fn live_link_packets_decode_in_a_real_client_as_the_same_weights() {
         "--max-frames",
         "20",
         "--vmc",
-        &vmc_target,
+        &format!("127.0.0.1:{}", ports[1]),
         "--live-link",
-        &format!("127.0.0.1:{}", port.trim()),
+        &format!("127.0.0.1:{}", ports[0]),
         "--subject",
         "Actor",
+        "--out",
+        s(&take),
         "--models",
         s(&models),
     ]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert!(receiver.wait().unwrap().success());
-    let packets = common::json(&decoded);
-    let packets = packets.as_array().unwrap();
-    let messages = collect.join().unwrap();
-    let vmc_frames: Vec<Vec<(String, f32)>> = messages
-        .split(|(a, _)| a == "/VMC/Ext/Blend/Apply")
-        .filter(|f| f.iter().any(|(a, _)| a == "/VMC/Ext/Blend/Val"))
-        .map(|f| {
-            f.iter()
-                .filter(|(a, _)| a == "/VMC/Ext/Blend/Val")
-                .map(|(_, args)| match (&args[0], &args[1]) {
-                    (Arg::Str(n), Arg::Float(w)) => (n.clone(), *w),
-                    other => panic!("{other:?}"),
-                })
-                .collect()
-        })
-        .collect();
+    let decoded = common::json(&decoded);
+    let packets = decoded["packets"].as_array().unwrap();
+    let vmc = decoded["vmc"].as_array().unwrap();
+    // The recording's rows: every processed frame, in order.
+    let csv = std::fs::read_to_string(take.join("blendshapes.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 20, "{err}");
     assert_eq!(packets.len(), 20, "one packet per frame with a face");
-    assert_eq!(vmc_frames.len(), 20);
-    for (packet, weights) in packets.iter().zip(&vmc_frames) {
+    assert_eq!(vmc.len(), 20, "one applied frame per frame with a face");
+    for ((packet, weights), row) in packets.iter().zip(vmc).zip(&rows) {
         assert_eq!(packet["ok"], true);
         assert_eq!(packet["name"], "Actor");
         assert_eq!(packet["fps"], 60);
@@ -272,11 +278,25 @@ fn live_link_packets_decode_in_a_real_client_as_the_same_weights() {
             packet["uuid"],
             format!("${}", visage::live::DEFAULT_DEVICE_ID)
         );
-        for (name, w) in weights {
-            let mut client_name = name.clone();
-            client_name[..1].make_ascii_uppercase();
-            let decoded = packet["shapes"][&client_name].as_f64().unwrap();
-            assert_eq!(decoded as f32, *w, "{name}");
+        let weights = weights.as_array().unwrap();
+        assert_eq!(weights.len(), 52);
+        for (pair, name) in weights.iter().zip(ARKIT_BLENDSHAPES) {
+            assert_eq!(pair[0], name);
+            let w = pair[1].as_f64().unwrap();
+            let mut column = name.to_string();
+            column[..1].make_ascii_uppercase();
+            let recorded: f64 = row[header.iter().position(|h| *h == column).unwrap()]
+                .parse()
+                .unwrap();
+            assert!(
+                (w - recorded).abs() < 1e-6,
+                "{name}: VMC {w}, CSV {recorded}"
+            );
+            let llf = packet["shapes"][&column].as_f64().unwrap();
+            assert!(
+                (llf - recorded).abs() < 1e-6,
+                "{name}: Live Link {llf}, CSV {recorded}"
+            );
         }
     }
 }
