@@ -541,3 +541,45 @@ fn vmc_bones_carry_the_heads_rotation_in_unitys_frame() {
     // sin(11° / 2) ≈ 0.096.
     assert!((0.03..0.2).contains(&median), "{head_x:?}");
 }
+
+/// `--latency 1`: each frame waits for the next one (the smoother's look-ahead), so at the
+/// clip's 30 frames a second its latency holds a frame interval; every frame still comes out,
+/// the last one when the source ends.
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn a_frame_of_look_ahead_holds_each_frame_for_the_next() {
+    let (models, clip) = common::inputs();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("take");
+    let o = visage(&[
+        "live",
+        s(&clip),
+        "--realtime",
+        "--latency",
+        "1",
+        "--max-frames",
+        "15",
+        "--out",
+        s(&out),
+        "--models",
+        s(&models),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(processed(&err), 15, "{err}");
+    let m = common::json(&out.join("metrics.json"));
+    assert_eq!(m["parameters"]["latency_frames"], 1, "{}", m["parameters"]);
+    let mut ms: Vec<f64> = m["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["latency_ms"].as_f64().unwrap())
+        .collect();
+    assert_eq!(ms.len(), 15);
+    ms.sort_by(f64::total_cmp);
+    // The next frame comes 33 ms after this one.
+    assert!(ms[7] > 25.0, "{ms:?}");
+}

@@ -17,7 +17,7 @@ use crate::depth_stage::DepthStage;
 use crate::keypoint_motion::KeypointMotion;
 use crate::pipeline::{run_stages, Stages};
 use crate::recorder::Recorder;
-use crate::stages::{FaceStage, FuseStage, FusedDepth, ModelStage, Surfaces};
+use crate::stages::{FaceStage, FuseStage, FusedDepth, ModelStage, Surfaces, Tracked};
 use crate::{DepthSource, Error, FrameSink, Input, TemporalMode};
 use visage_face::CutDetector;
 use visage_face::{
@@ -53,6 +53,8 @@ pub struct Reconstructor {
     landmarks: Option<LandmarksFrame>,
     warning: Option<String>,
     blendshapes: Option<BlendshapeFrame>,
+    /// Frames [`Reconstructor::push`] tracked, waiting for the rest of the pipeline.
+    pending: VecDeque<(Tracked, Frame)>,
 }
 
 /// One frame's results from [`Reconstructor::process`].
@@ -335,6 +337,7 @@ impl Reconstructor {
             landmarks: None,
             warning: None,
             blendshapes: None,
+            pending: VecDeque::new(),
         })
     }
 
@@ -367,9 +370,46 @@ impl Reconstructor {
     pub fn process(&mut self, frame: &Frame) -> Result<FrameResult<'_>, Error> {
         // One frame in, that frame out: the landmark smoother without latency.
         self.face.make_causal();
-        let Some((mut tracked, _)) = self.face.track(frame.clone(), 0.0)?.pop() else {
+        let Some((tracked, _)) = self.face.track(frame.clone(), 0.0)?.pop() else {
             unreachable!("without latency every frame comes out at once");
         };
+        self.complete(tracked, frame)
+    }
+
+    /// Tracks `frame` with the landmark smoother's latency kept (the builder's
+    /// [`Builder::latency`]): the frames it completes — with latency 1, the one
+    /// before it; at a cut or a lost face, the ones held back too — wait for
+    /// [`Reconstructor::next_result`], in input order. For a live source whose curves may
+    /// trail by a frame for the smoother's look-ahead.
+    ///
+    /// # Errors
+    /// As [`Reconstructor::process`].
+    pub fn push(&mut self, frame: &Frame) -> Result<(), Error> {
+        let done = self.face.track(frame.clone(), 0.0)?;
+        self.pending.extend(done);
+        Ok(())
+    }
+
+    /// The input has ended: the frames the smoother still holds back are completed (see
+    /// [`Reconstructor::push`]).
+    ///
+    /// # Errors
+    /// As [`Reconstructor::process`].
+    pub fn push_end(&mut self) -> Result<(), Error> {
+        let done = self.face.finish()?;
+        self.pending.extend(done);
+        Ok(())
+    }
+
+    /// The next frame [`Reconstructor::push`] completed, through the rest of the pipeline;
+    /// `None` when none waits.
+    pub fn next_result(&mut self) -> Option<Result<FrameResult<'_>, Error>> {
+        let (tracked, frame) = self.pending.pop_front()?;
+        Some(self.complete(tracked, &frame))
+    }
+
+    /// A tracked frame through the model, keypoint, depth and fusion stages, recorded.
+    fn complete(&mut self, mut tracked: Tracked, frame: &Frame) -> Result<FrameResult<'_>, Error> {
         if let Some(model) = &mut self.model_stage {
             model.fit(&frame.image, &mut tracked)?;
         }

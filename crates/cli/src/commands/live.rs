@@ -63,6 +63,10 @@ pub struct LiveArgs {
     /// network stream, never for a camera, a file or standard input; 0: never).
     #[arg(long, value_name = "SECONDS")]
     pub idle_end: Option<f64>,
+    /// Frames of look-ahead of the landmark smoother: 0 sends each frame as soon as it is
+    /// processed; 1 holds it until the next one is in (steadier curves, a frame's time later).
+    #[arg(long, default_value_t = 0, value_name = "FRAMES")]
+    pub latency: usize,
     /// Horizontal field of view of the camera, degrees (default: as `visage run`).
     #[arg(long)]
     pub fov_deg: Option<f64>,
@@ -125,10 +129,12 @@ pub fn run(args: LiveArgs) -> anyhow::Result<()> {
     };
     let capture = LiveCapture::open(&args.source, &options)?;
     let (width, height) = capture.size();
-    let mut builder = Reconstructor::builder().camera(match args.fov_deg {
-        Some(fov) => Camera::FovDeg(fov),
-        None => Camera::Auto,
-    });
+    let mut builder = Reconstructor::builder()
+        .latency(args.latency)
+        .camera(match args.fov_deg {
+            Some(fov) => Camera::FovDeg(fov),
+            None => Camera::Auto,
+        });
     if let Some(dir) = &args.models {
         builder = builder.models_dir(dir);
     }

@@ -1,5 +1,6 @@
 //! [`LiveSession`]: a live source through a reconstructor, frame by frame, to subscribers.
 
+use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -70,7 +71,10 @@ pub struct LiveSession {
 }
 
 impl LiveSession {
-    /// A session processing frames with `reconstructor` (built for the source's size; causal).
+    /// A session processing frames with `reconstructor`, built for the source's size. Its
+    /// landmark smoother's latency ([`crate::Builder::latency`]) is the session's: 0 hands each
+    /// frame on as soon as it is processed; 1 holds it until the next frame is in (steadier
+    /// curves, one frame later).
     pub fn new(reconstructor: Reconstructor) -> LiveSession {
         LiveSession {
             reconstructor,
@@ -174,35 +178,53 @@ impl LiveSession {
         with_face: &mut usize,
     ) -> Result<(), Error> {
         let started = capture.started();
-        while !stop.load(Ordering::SeqCst) && max_frames.is_none_or(|m| latencies.len() < m) {
-            let Some(captured) = capture.next()? else {
-                break;
-            };
-            let result = self.reconstructor.process(&captured.frame)?;
-            let first = self.span.map_or(captured.captured_at, |s| s.0);
-            self.span = Some((first, captured.captured_at));
-            *with_face += usize::from(result.metrics.has_mesh());
-            let frame = LiveFrame {
-                result: &result,
-                captured_at: captured.captured_at,
-                time_s: captured.captured_at.duration_since(started).as_secs_f64(),
-            };
-            for s in subscribers.iter_mut() {
-                s.frame(&frame).map_err(|e| Error::Input {
-                    path: s.describe().into(),
-                    reason: format!("cannot send: {e}"),
-                })?;
+        // When each frame still in the reconstructor was captured: with the smoother's
+        // look-ahead a frame comes out after the next one is in.
+        let mut in_flight: VecDeque<(usize, Instant)> = VecDeque::new();
+        loop {
+            let more = !stop.load(Ordering::SeqCst)
+                && max_frames.is_none_or(|m| latencies.len() + in_flight.len() < m);
+            let captured = if more { capture.next()? } else { None };
+            match &captured {
+                Some(c) => {
+                    in_flight.push_back((c.frame.index, c.captured_at));
+                    self.reconstructor.push(&c.frame)?;
+                }
+                None => self.reconstructor.push_end()?,
             }
-            // The streams have it: the latency ends here, before the recording writes.
-            latencies.push((
-                captured.frame.index,
-                captured.captured_at.elapsed().as_secs_f64() * 1e3,
-            ));
-            if let Some(recording) = &mut self.recording {
-                recording.write(&result)?;
+            while let Some(result) = self.reconstructor.next_result() {
+                let result = result?;
+                let captured_at = loop {
+                    match in_flight.pop_front() {
+                        Some((index, at)) if index == result.index() => break at,
+                        Some(_) => continue,
+                        None => break Instant::now(),
+                    }
+                };
+                *with_face += usize::from(result.metrics.has_mesh());
+                let first = self.span.map_or(captured_at, |s| s.0);
+                self.span = Some((first, captured_at));
+                let frame = LiveFrame {
+                    result: &result,
+                    captured_at,
+                    time_s: captured_at.duration_since(started).as_secs_f64(),
+                };
+                for s in subscribers.iter_mut() {
+                    s.frame(&frame).map_err(|e| Error::Input {
+                        path: s.describe().into(),
+                        reason: format!("cannot send: {e}"),
+                    })?;
+                }
+                // The streams have it: the latency ends here, before the recording writes.
+                latencies.push((result.index(), captured_at.elapsed().as_secs_f64() * 1e3));
+                if let Some(recording) = &mut self.recording {
+                    recording.write(&result)?;
+                }
+            }
+            if captured.is_none() {
+                return Ok(());
             }
         }
-        Ok(())
     }
 }
 
