@@ -390,6 +390,13 @@ impl Reconstructor {
         Ok(())
     }
 
+    /// Whether every frame's record is kept for [`Reconstructor::finish`] (the default), or
+    /// only the newest one, so that memory stays flat over a live session that is not
+    /// recorded (every record kept, it grows by about 0.8 KB a frame: 90 MB an hour at 30 fps).
+    pub fn keep_records(&mut self, all: bool) {
+        self.recorder.newest_only = !all;
+    }
+
     /// The input has ended: the frames the smoother still holds back are completed (see
     /// [`Reconstructor::push`]).
     ///

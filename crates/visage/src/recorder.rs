@@ -12,15 +12,24 @@ use crate::{Error, FrameSink, MeshFrame, Surfaces};
 pub(crate) struct Recorder {
     pub frames: Vec<FrameMetrics>,
     quality: QualityMeter,
-    /// Position in `frames` of the last frame whose surfaces were measured.
+    /// The record number (records forgotten included) of the last frame whose surfaces were
+    /// measured.
     last_measured: Option<usize>,
     /// Vertices of the mesh (0 before the first mesh).
     pub vertices: usize,
+    /// Only the newest record is kept (a live session that is not recorded: memory stays flat).
+    pub newest_only: bool,
+    /// Records dropped for that, before `frames[0]`.
+    forgotten: usize,
 }
 
 impl Recorder {
     /// Appends a frame's record; returns its position.
     pub fn push(&mut self, metrics: FrameMetrics) -> usize {
+        if self.newest_only {
+            self.forgotten += self.frames.len();
+            self.frames.clear();
+        }
         self.frames.push(metrics);
         self.frames.len() - 1
     }
@@ -33,10 +42,11 @@ impl Recorder {
     /// Measures the meshed frame at `position` (its final surfaces): the jitter pair with the
     /// previous meshed frame (when it is the frame before) and its reprojection errors.
     pub fn measure(&mut self, position: usize, k: &Intrinsics, s: &Surfaces) {
-        if self.last_measured.is_none_or(|p| p + 1 != position) {
+        let record = self.forgotten + position;
+        if self.last_measured.is_none_or(|p| p + 1 != record) {
             self.quality.gap();
         }
-        self.last_measured = Some(position);
+        self.last_measured = Some(record);
         self.vertices = s.fused.len();
         let (f, r) = self.quality.push(
             k,
@@ -74,5 +84,29 @@ impl Recorder {
     /// The run's totals.
     pub fn summary(&self, timing: RunTiming) -> RunSummary {
         RunSummary::of(&self.frames, self.quality.summary(), timing)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use visage_run_folder::FrameStatus;
+
+    #[test]
+    fn newest_only_keeps_one_record_and_counts_the_rest() {
+        let record = |i| FrameMetrics::new(i, format!("frame {i}"), FrameStatus::NoFace);
+        let mut all = Recorder::default();
+        let mut newest = Recorder {
+            newest_only: true,
+            ..Recorder::default()
+        };
+        for i in 0..5 {
+            assert_eq!(all.push(record(i)), i);
+            assert_eq!(newest.push(record(i)), 0);
+        }
+        assert_eq!(all.frames.len(), 5);
+        assert_eq!(newest.frames.len(), 1);
+        assert_eq!(newest.frames[0].index, 4);
+        assert_eq!(newest.forgotten, 4);
     }
 }

@@ -136,6 +136,8 @@ impl LiveSession {
         stop: &AtomicBool,
         max_frames: Option<usize>,
     ) -> LiveSummary {
+        // Only a recording needs every frame's record (its metrics.json).
+        self.reconstructor.keep_records(self.recording.is_some());
         let mut with_face = 0;
         let mut latencies = std::mem::take(&mut self.latencies_ms);
         if let Err(e) = self.process(
