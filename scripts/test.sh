@@ -18,6 +18,19 @@ cargo fmt --all --check
 cargo clippy -q --workspace --all-targets -- -D warnings
 python3 scripts/import_cycles.py
 cargo test --workspace
+# The Python package: its wheel built with the test build's profile (the dependencies `cargo
+# test` compiled), installed in target/py-venv, and its tests (pytest) against the command
+# line's debug binary.
+py_venv="${CARGO_TARGET_DIR:-target}/py-venv"
+if [ -x "$py_venv/bin/maturin" ]; then
+  bash scripts/build_python.sh dev
+  VISAGE_BIN="${CARGO_TARGET_DIR:-target}/debug/visage" "$py_venv/bin/python" -m pytest -q python/tests
+elif [ "${CI:-}" = true ]; then
+  echo "test: no $py_venv/bin/maturin for the Python package (scripts/setup.sh)" >&2
+  exit 1
+else
+  echo "test: skipped the Python package (no $py_venv: run scripts/setup.sh)" >&2
+fi
 # The batch deploy files: the Kubernetes manifest against the schemas, the Slurm array job on
 # a single-node cluster started for the test (each says why when it skips).
 bash scripts/test_deploy.sh
