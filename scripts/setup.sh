@@ -92,7 +92,8 @@ fi
 
 # The Python package (python/; its native module is the crate crates/python): maturin and
 # pytest, pinned, in a virtual environment under the build folder, and the model files copied
-# into the package so that its wheel carries them. The wheel is built and installed there: by
+# into the package with their notices (MediaPipe's, Apache-2.0; ICT-FaceKit's, MIT, for the face
+# model built into the module) so that its wheel carries them. The wheel is built and installed there: by
 # the test command with the test build's profile (scripts/test.sh), here optimised.
 py_venv="$target_dir/py-venv"
 if [ ! -x "$py_venv/bin/maturin" ] || ! "$py_venv/bin/python" -c "import pytest, numpy" >/dev/null 2>&1; then
@@ -101,7 +102,8 @@ if [ ! -x "$py_venv/bin/maturin" ] || ! "$py_venv/bin/python" -c "import pytest,
 fi
 rm -rf python/visage/models
 mkdir -p python/visage/models
-cp "${VISAGE_MODELS:-models}"/*.tflite python/visage/models/
+cp "${VISAGE_MODELS:-models}"/* python/visage/models/
+cp crates/morphable/data/LICENSE-ICT-FaceKit python/visage/models/
 
 [ "$mode" = ci ] && exit 0
 

@@ -45,8 +45,14 @@ __all__ = [
 
 PathLike = Union[str, "os.PathLike[str]"]
 
-#: Model files the package needs (MediaPipe's networks, Apache-2.0).
-MODEL_FILES = ("face_detection_short_range.tflite", "face_landmark.tflite", "iris_landmark.tflite")
+#: Model files the package needs (MediaPipe's networks and canonical face, Apache-2.0; the wheel
+#: carries them in ``visage/models/`` with their ``NOTICE``).
+MODEL_FILES = (
+    "face_detection_short_range.tflite",
+    "face_landmark.tflite",
+    "iris_landmark.tflite",
+    "geometry_pipeline_metadata_landmarks.binarypb",
+)
 
 
 def _models_dir(models: Optional[PathLike]) -> Optional[str]:
@@ -135,17 +141,6 @@ class Reconstructor:
 
 def _result(raw: Dict[str, Any]) -> FrameResult:
     metrics = json.loads(raw["metrics_json"])
-    record = json.loads(raw["landmarks_json"])
-    face = record["faces"][0] if record.get("faces") else None
-    landmarks = None
-    head_pose = None
-    if face is not None:
-        landmarks = np.asarray(face["landmarks"], dtype=np.float32)[:, :2]
-        pose = face.get("pose")
-        if pose is not None:
-            head_pose = np.eye(4)
-            head_pose[:3, :3] = pose["rotation"]
-            head_pose[:3, 3] = pose["translation_m"]
     weights = raw["weights"]
     blendshapes = {} if weights is None else {n: float(w) for n, w in zip(ARKIT_BLENDSHAPES, weights)}
     head = raw["head"]
@@ -153,10 +148,10 @@ def _result(raw: Dict[str, Any]) -> FrameResult:
         index=raw["index"],
         status=metrics.get("status", ""),
         vertices=raw["vertices"],
-        landmarks=landmarks,
+        landmarks=raw["landmarks"],
         blendshapes=blendshapes,
         blendshape_array=weights,
-        head_pose=head_pose,
+        head_pose=raw["head_pose"],
         head_angles=None if head is None else tuple(float(a) for a in head),
         metrics=metrics,
     )

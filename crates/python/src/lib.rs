@@ -129,7 +129,18 @@ impl NativeReconstructor {
             Ok(Processed {
                 index: r.index(),
                 metrics: serde_json::to_string(r.metrics).unwrap_or_default(),
-                landmarks: serde_json::to_string(r.landmarks).unwrap_or_default(),
+                landmarks: r.landmarks.faces.first().map(|f| {
+                    f.landmarks
+                        .iter()
+                        .flat_map(|p| [p[0] as f32, p[1] as f32])
+                        .collect()
+                }),
+                pose: r
+                    .landmarks
+                    .faces
+                    .first()
+                    .and_then(|f| f.pose.as_ref())
+                    .map(|p| (p.rotation, p.translation_m)),
                 vertices: r.mesh().map(|m| {
                     m.vertices
                         .iter()
@@ -151,7 +162,28 @@ impl NativeReconstructor {
         let d = PyDict::new(py);
         d.set_item("index", out.index)?;
         d.set_item("metrics_json", out.metrics)?;
-        d.set_item("landmarks_json", out.landmarks)?;
+        match out.landmarks {
+            Some(l) => {
+                let n = l.len() / 2;
+                d.set_item("landmarks", PyArray1::from_vec(py, l).reshape([n, 2])?)?;
+            }
+            None => d.set_item("landmarks", py.None())?,
+        }
+        match out.pose {
+            Some((rotation, translation)) => {
+                let mut m = [0.0f64; 16];
+                for r in 0..3 {
+                    m[4 * r..4 * r + 3].copy_from_slice(&rotation[r]);
+                    m[4 * r + 3] = translation[r];
+                }
+                m[15] = 1.0;
+                d.set_item(
+                    "head_pose",
+                    PyArray1::from_vec(py, m.to_vec()).reshape([4, 4])?,
+                )?;
+            }
+            None => d.set_item("head_pose", py.None())?,
+        }
         match out.vertices {
             Some(v) => {
                 let n = v.len() / 3;
@@ -194,7 +226,10 @@ impl NativeReconstructor {
 struct Processed {
     index: usize,
     metrics: String,
-    landmarks: String,
+    /// The first face's 468 landmarks, `[x, y]` pixels, flat.
+    landmarks: Option<Vec<f32>>,
+    /// Its metric head pose: rotation and translation (metres), model → camera.
+    pose: Option<([[f64; 3]; 3], [f64; 3])>,
     vertices: Option<Vec<f32>>,
     triangles: Option<Vec<[u32; 3]>>,
     weights: Option<Vec<f32>>,
@@ -242,10 +277,7 @@ impl NativeFrames {
     }
 
     /// The next `(index, timestamp_s, frame)`, the frame `(H, W, 3)` uint8 RGB.
-    fn __next__<'py>(
-        &mut self,
-        py: Python<'py>,
-    ) -> PyResult<Option<NumpyFrame<'py>>> {
+    fn __next__<'py>(&mut self, py: Python<'py>) -> PyResult<Option<NumpyFrame<'py>>> {
         let input = &self.input;
         let next = py.detach(|| input.lock().unwrap_or_else(|e| e.into_inner()).next());
         let Some(frame) = next else {
