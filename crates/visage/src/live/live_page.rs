@@ -44,7 +44,8 @@ const MAX_HEAD: usize = 16 * 1024;
 /// How long a browser may take to send its request, or to take a message.
 const IO_TIMEOUT: Duration = Duration::from_secs(5);
 
-/// Numbers before the vertices in a frame message (see [`frame_message`]).
+/// Numbers before the vertices in a frame message: frame index, seconds, latency, fps, face,
+/// yaw, pitch, roll, then the 52 weights.
 pub const FRAME_HEADER: usize = 8 + ARKIT_BLENDSHAPE_COUNT;
 
 /// A browser's slot: the mesh's topology when it changed, and the newest frame.
