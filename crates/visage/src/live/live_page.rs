@@ -155,6 +155,10 @@ impl LiveSubscriber for LivePage {
                 lock_outbox(browser).topology = Some(Arc::clone(&topology));
             }
         }
+        if shared.browsers.is_empty() {
+            // Nobody watches: no message to make.
+            return Ok(());
+        }
         let vertices = self.topology_of.map_or(0, |(v, _)| v);
         let message = Arc::new(frame_message(frame, self.recent.len() as f64, vertices));
         shared.browsers.retain(|browser| {
