@@ -99,7 +99,7 @@ pub fn report_html(
     if !plots.is_empty() {
         h.push_str("<section><h2>Per frame</h2><div class=\"grid\">\n");
         for p in plots {
-            let _ = writeln!(h, "<figure>{}</figure>", p.svg);
+            let _ = writeln!(h, "<figure class=\"chart\">{}</figure>", p.svg);
         }
         h.push_str("</div></section>\n");
     }
@@ -262,7 +262,8 @@ padding:0 1em;color:#222}.top{display:flex;flex-wrap:wrap;gap:2em;align-items:fl
 table{border-collapse:collapse}th,td{padding:.25em .8em;border-bottom:1px solid #ddd;\
 text-align:left;vertical-align:top}th{font-weight:500;color:#444}\
 .grid{display:flex;flex-wrap:wrap;gap:1em}figure{margin:0}figure img{max-width:340px;\
-border:1px solid #ccc}figure svg{max-width:520px;height:auto}figcaption{color:#666;\
+border:1px solid #ccc}figure.chart{flex:1 1 540px;min-width:0}figure svg{display:block;\
+width:100%;height:auto}figcaption{color:#666;\
 font-size:.9em}#visage-viewer{max-width:640px}";
 
 #[cfg(test)]

@@ -1,9 +1,12 @@
-//! Small hand-written SVG charts (no plotting dependency): the benchmark's and the run
-//! report's line, x–y and heat-map charts.
+//! The benchmark's and the run report's charts as SVG: line and x–y charts drawn with
+//! `plotters` (ticks, a grid, the legend beside the data), and a small hand-written heat map
+//! (a table of coloured cells with their values, which a chart library does not make simpler).
 
 #![forbid(unsafe_code)]
 
 use std::fmt::Write as _;
+
+use plotters::prelude::*;
 
 /// One line of a chart: `values[i]` is plotted at x = `first_x + i`.
 #[derive(Clone, Debug, PartialEq)]
@@ -13,18 +16,8 @@ pub struct Series {
     pub first_x: f64,
 }
 
-const COLORS: [&str; 8] = [
-    "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
-];
-const W: f64 = 640.0;
-const H: f64 = 400.0;
+/// The heat map's margin (px).
 const PAD: f64 = 50.0;
-
-/// An axis label: up to three decimals, trailing zeros dropped.
-fn tick(v: f64) -> String {
-    let s = format!("{v:.3}");
-    s.trim_end_matches('0').trim_end_matches('.').to_string()
-}
 
 fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -59,7 +52,22 @@ pub struct XySeries {
     pub markers: bool,
 }
 
-/// An x–y chart with axes, min/max labels and a legend; the y axis starts at 0 or below.
+/// The y range drawn for data from `lo` to `hi`: the data's own range with a margin, from 0
+/// when the data start near it (weights, errors), so a curve far from 0 is not a flat line
+/// at the top.
+fn y_range(lo: f64, hi: f64) -> (f64, f64) {
+    let span = (hi - lo).max(hi.abs() * 1e-3).max(1e-9);
+    let lo = if lo >= 0.0 && lo < 0.25 * hi {
+        0.0
+    } else {
+        lo - 0.05 * span
+    };
+    (lo, hi + 0.05 * span)
+}
+
+/// An x–y chart (plotters' SVG backend): a grid with ticks on both axes, the axes' labels and
+/// the legend in a column right of the data, so no name is cut; the SVG scales to its
+/// container (a `viewBox`, no fixed size).
 pub fn xy_chart_svg(title: &str, x_label: &str, y_label: &str, series: &[XySeries]) -> String {
     let finite = series.iter().flat_map(|s| {
         s.points
@@ -67,7 +75,7 @@ pub fn xy_chart_svg(title: &str, x_label: &str, y_label: &str, series: &[XySerie
             .copied()
             .filter(|(x, y)| x.is_finite() && y.is_finite())
     });
-    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, 0.0f64, f64::MIN);
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for (x, y) in finite {
         x0 = x0.min(x);
         x1 = x1.max(x);
@@ -75,125 +83,131 @@ pub fn xy_chart_svg(title: &str, x_label: &str, y_label: &str, series: &[XySerie
         y1 = y1.max(y);
     }
     if x0 > x1 {
-        (x0, x1, y1) = (0.0, 1.0, 1.0);
+        (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
     }
     if x1 <= x0 {
         x1 = x0 + 1.0;
     }
-    if y1 <= y0 {
-        y1 = y0 + 1.0;
+    let (y0, y1) = y_range(y0, y1);
+    let legend_width = series
+        .iter()
+        .map(|s| s.name.chars().count())
+        .max()
+        .map_or(0, |n| 44 + 9 * n as u32);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (W + legend_width, H)).into_drawing_area();
+        // Drawing into a string cannot fail; a chart that could not be laid out is left empty.
+        let _ = draw_xy(&root, title, x_label, y_label, series, (x0, x1), (y0, y1));
+        let _ = draw_legend(&root, series, W);
+        let _ = root.present();
     }
-    let px = |x: f64| PAD + (x - x0) / (x1 - x0) * (W - 2.0 * PAD);
-    let py = |y: f64| H - PAD - (y - y0) / (y1 - y0) * (H - 2.0 * PAD);
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" font-family="sans-serif" font-size="12">"#
-    );
-    let _ = writeln!(s, r#"<rect width="{W}" height="{H}" fill="white"/>"#);
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="20" text-anchor="middle" font-size="14">{}</text>"#,
-        W / 2.0,
-        escape(title)
-    );
-    let _ = writeln!(
-        s,
-        r#"<path d="M{PAD} {} L{} {} M{PAD} {} L{PAD} {PAD}" stroke="black" fill="none"/>"#,
-        H - PAD,
-        W - PAD,
-        H - PAD,
-        H - PAD
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{PAD}" y="{}" text-anchor="middle">{}</text>"#,
-        H - PAD + 15.0,
-        tick(x0)
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
-        W - PAD,
-        H - PAD + 15.0,
-        tick(x1)
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
-        W / 2.0,
-        H - 12.0,
-        escape(x_label)
-    );
-    if !y_label.is_empty() {
-        let _ = writeln!(
-            s,
-            r#"<text x="14" y="{}" text-anchor="middle" transform="rotate(-90 14 {})">{}</text>"#,
-            H / 2.0,
-            H / 2.0,
-            escape(y_label)
-        );
-    }
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="{}" text-anchor="end">{y0:.3}</text>"#,
-        PAD - 4.0,
-        H - PAD
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="{}" text-anchor="end">{y1:.3}</text>"#,
-        PAD - 4.0,
-        PAD + 4.0
-    );
+    responsive(svg)
+}
+
+const W: u32 = 640;
+const H: u32 = 400;
+const COLORS: [RGBColor; 8] = [
+    RGBColor(0x1f, 0x77, 0xb4),
+    RGBColor(0xff, 0x7f, 0x0e),
+    RGBColor(0x2c, 0xa0, 0x2c),
+    RGBColor(0xd6, 0x27, 0x28),
+    RGBColor(0x94, 0x67, 0xbd),
+    RGBColor(0x8c, 0x56, 0x4b),
+    RGBColor(0xe3, 0x77, 0xc2),
+    RGBColor(0x7f, 0x7f, 0x7f),
+];
+
+type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
+type DrawResult<'a> =
+    Result<(), DrawingAreaErrorKind<<SVGBackend<'a> as DrawingBackend>::ErrorType>>;
+
+fn draw_xy<'a>(
+    root: &Area<'a>,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[XySeries],
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> DrawResult<'a> {
+    root.fill(&WHITE)?;
+    let (area, _) = root.split_horizontally(W);
+    let mut chart = ChartBuilder::on(&area)
+        .caption(title, ("sans-serif", 19))
+        .margin(10)
+        .x_label_area_size(48)
+        .y_label_area_size(if y_label.is_empty() { 56 } else { 76 })
+        .build_cartesian_2d(x0..x1, y0..y1)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .x_labels(8)
+        .y_labels(6)
+        .label_style(("sans-serif", 15))
+        .axis_desc_style(("sans-serif", 15))
+        .light_line_style(TRANSPARENT)
+        .bold_line_style(RGBColor(205, 205, 205))
+        .draw()?;
     for (k, se) in series.iter().enumerate() {
         let color = COLORS[k % COLORS.len()];
-        let mut d = String::new();
-        let mut pen_down = false;
-        for &(x, y) in &se.points {
-            if !(x.is_finite() && y.is_finite()) {
-                pen_down = false;
-                continue;
-            }
-            let _ = write!(
-                d,
-                "{}{:.1} {:.1} ",
-                if pen_down { "L" } else { "M" },
-                px(x),
-                py(y)
-            );
-            pen_down = true;
+        // A non-finite point lifts the pen: each finite run is its own line.
+        for run in se
+            .points
+            .split(|(x, y)| !(x.is_finite() && y.is_finite()))
+            .filter(|r| !r.is_empty())
+        {
+            chart.draw_series(LineSeries::new(run.iter().copied(), color.stroke_width(2)))?;
             if se.markers {
-                let _ = writeln!(
-                    s,
-                    r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{color}"/>"#,
-                    px(x),
-                    py(y)
-                );
+                chart.draw_series(run.iter().map(|&p| Circle::new(p, 3, color.filled())))?;
             }
         }
-        let _ = writeln!(
-            s,
-            r#"<path d="{}" stroke="{color}" stroke-width="1.5" fill="none"/>"#,
-            d.trim_end()
-        );
-        let ly = PAD + 16.0 * k as f64;
-        let _ = writeln!(
-            s,
-            r#"<line x1="{}" y1="{ly}" x2="{}" y2="{ly}" stroke="{color}" stroke-width="2"/>"#,
-            W - PAD - 150.0,
-            W - PAD - 130.0
-        );
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="{}">{}</text>"#,
-            W - PAD - 125.0,
-            ly + 4.0,
-            escape(&se.name)
-        );
     }
-    s.push_str("</svg>\n");
-    s
+    Ok(())
+}
+
+/// The legend in its own column right of the chart: a colour swatch and the whole name.
+fn draw_legend<'a>(root: &Area<'a>, series: &[XySeries], left: u32) -> DrawResult<'a> {
+    let font = ("sans-serif", 15).into_font().color(&BLACK);
+    for (k, se) in series.iter().enumerate() {
+        let color = COLORS[k % COLORS.len()];
+        let y = 44 + 22 * k as i32;
+        let x = left as i32 + 8;
+        root.draw(&PathElement::new(
+            vec![(x, y), (x + 22, y)],
+            color.stroke_width(3),
+        ))?;
+        root.draw(&Text::new(se.name.clone(), (x + 28, y - 9), font.clone()))?;
+    }
+    Ok(())
+}
+
+/// plotters writes a fixed `width` and `height`; a `viewBox` and a width of 100 % let the page
+/// size the chart to its container with its proportions kept.
+fn responsive(svg: String) -> String {
+    let Some(start) = svg.find("<svg") else {
+        return svg;
+    };
+    let end = start + svg[start..].find('>').unwrap_or(0);
+    let tag = &svg[start..end];
+    let attr = |name: &str| -> Option<String> {
+        let i = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+        let j = i + tag[i..].find('"')?;
+        Some(tag[i..j].to_string())
+    };
+    let (Some(w), Some(h)) = (attr("width"), attr("height")) else {
+        return svg;
+    };
+    let new_tag = tag
+        .replacen(&format!(" width=\"{w}\""), " width=\"100%\"", 1)
+        .replacen(&format!(" height=\"{h}\""), "", 1);
+    let new_tag = if new_tag.contains("viewBox") {
+        new_tag
+    } else {
+        format!("{new_tag} viewBox=\"0 0 {w} {h}\"")
+    };
+    format!("{}{}{}", &svg[..start], new_tag, &svg[end..])
 }
 
 /// A heat map of `values` (row-major, rows = `rows`, columns = `cols`), darker = smaller, with
@@ -269,19 +283,40 @@ mod tests {
     use super::*;
 
     #[test]
-    fn charts_are_well_formed_and_escape_text() {
+    fn charts_are_well_formed_scale_to_their_container_and_escape_text() {
         let s = line_chart_svg(
             "a < b",
             "frame",
             &[Series {
-                name: "raw".into(),
-                values: vec![1.0, f64::NAN, 2.0, 3.0],
+                name: "a long name that a legend inside the data would cut".into(),
+                values: vec![1.0, 1.5, f64::NAN, 2.0, 3.0],
                 first_x: 0.0,
             }],
         );
         assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
-        assert!(s.contains("a &lt; b") && s.contains("M50.0") && s.contains(">raw<"));
+        let tag = &s[..s.find('>').unwrap()];
+        assert!(
+            tag.contains("viewBox=\"0 0 ") && tag.contains("width=\"100%\""),
+            "{tag}"
+        );
+        assert!(!tag.contains("height="), "{tag}");
+        assert!(s.contains("a &lt; b"), "the title is escaped");
+        assert!(s.contains("a long name that a legend inside the data would cut"));
+        // The NaN lifts the pen: two lines in the first colour, and the legend's swatch.
+        let first_colour = s
+            .lines()
+            .filter(|l| l.starts_with("<polyline") && l.contains("stroke=\"#1F77B4\""));
+        assert_eq!(first_colour.count(), 3, "{s}");
         let h = heatmap_svg("t", &[1.0, 2.0], &[3.0], &[0.5, 0.7]);
         assert_eq!(h.matches("<rect x=").count(), 2);
+    }
+
+    #[test]
+    fn the_y_range_starts_at_zero_only_for_data_near_it() {
+        assert_eq!(y_range(0.02, 1.0).0, 0.0);
+        let (lo, hi) = y_range(0.9, 1.0);
+        assert!(lo > 0.8 && lo < 0.9 && hi > 1.0, "{lo} {hi}");
+        let (lo, _) = y_range(-1.0, 1.0);
+        assert!(lo < -1.0);
     }
 }
