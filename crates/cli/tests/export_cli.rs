@@ -256,3 +256,68 @@ fn a_folder_that_is_not_a_run_is_exit_2_saying_what_it_is() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("nothing_here: no such folder"), "{err}");
 }
+
+/// The streams of a media file, as `ffprobe` lists them: (codec type, duration in seconds).
+fn streams(path: &Path) -> Vec<(String, f64)> {
+    let out = Command::new("ffprobe")
+        .args(["-v", "error", "-show_entries", "stream=codec_type,duration"])
+        .args(["-of", "csv=p=0"])
+        .arg(path)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "ffprobe {}", path.display());
+    String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .filter_map(|l| {
+            let (kind, duration) = l.split_once(',')?;
+            Some((kind.to_string(), duration.parse().ok()?))
+        })
+        .collect()
+}
+
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn the_preview_keeps_the_inputs_sound_in_step_with_the_frames() {
+    let models = visage_testdata::require(visage_testdata::models_dir());
+    let video = visage_testdata::shared_dir().join("data/video");
+    let tmp = tempfile::tempdir().unwrap();
+    // lp_d18 has a sound track, lp_d13 none.
+    for (clip, sound) in [("lp_d18.mp4", true), ("lp_d13.mp4", false)] {
+        let clip = visage_testdata::require(video.join(clip));
+        let out = tmp.path().join(clip.file_stem().unwrap());
+        run_ok(&[
+            "run",
+            s(&clip),
+            "--out",
+            s(&out),
+            "--every",
+            "2",
+            "--max-frames",
+            "15",
+            "--preview",
+            "--models",
+            s(&models),
+        ]);
+        let streams = streams(&out.join("preview.mp4"));
+        let duration = |kind: &str| streams.iter().find(|s| s.0 == kind).map(|s| s.1);
+        let video = duration("video").expect("a video stream");
+        assert!(
+            (video - 1.0).abs() < 0.05,
+            "every second frame of 30: {video} s"
+        );
+        match duration("audio") {
+            Some(audio) => {
+                assert!(sound, "{}: sound the input does not have", clip.display());
+                assert!(
+                    (audio - video).abs() < 0.1,
+                    "sound {audio} s, video {video} s"
+                );
+            }
+            None => assert!(!sound, "{}: the input's sound was dropped", clip.display()),
+        }
+    }
+}

@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use visage_camera::{DepthKind, Intrinsics};
 use visage_mesh::color::{linear_to_srgb_u8, srgb_to_linear_u8};
 use visage_render::{turn_about_centre, Albedo, Camera, Frame, Mat4, Renderer, Scene};
-use visage_video::{FrameSource, VideoWriter};
+use visage_video::{AudioTrack, FrameSource, VideoWriter};
 
 use crate::{Capture, ExportError};
 
@@ -44,7 +44,8 @@ pub struct PreviewSummary {
     pub height: u32,
 }
 
-/// input | shaded mesh over the input | shaded mesh turning slowly, side by side.
+/// input | shaded mesh over the input | shaded mesh turning slowly, side by side, with the
+/// input's sound.
 ///
 /// Writes an H.264 MP4 to `path` (through a temporary file, see [`VideoWriter`]). Frames
 /// without a mesh of their own show the input in the first two panels and an empty third.
@@ -61,7 +62,13 @@ pub fn write_preview(capture: &Capture, path: &Path) -> Result<PreviewSummary, E
     let k = capture.intrinsics;
     let (pw, ph) = panel_size(k.width, k.height);
     let camera = Camera::new(scaled_intrinsics(&k, pw, ph))?;
-    let mut writer = VideoWriter::create(path, 3 * pw, ph, frame_rate(capture))?;
+    // The input's sound from the first frame on (the preview plays at the frames' own pace,
+    // so it stays in sync); an image folder has none.
+    let audio = capture.input.is_file().then_some(AudioTrack {
+        path: &capture.input,
+        start_s: capture.frames[0].time_s,
+    });
+    let mut writer = VideoWriter::create_with_audio(path, 3 * pw, ph, frame_rate(capture), audio)?;
     let mut mesh = capture.mesh.clone();
     // Per-frame vertices: the OBJ's normals (if any) belong to another frame's.
     mesh.normals.clear();

@@ -1,6 +1,8 @@
 //! Video encoding through the `ffmpeg` command-line tool: RGB8 frames through a pipe into
 //! H.264 (libx264, yuv420p, CRF 23, preset veryfast) in an MP4 with its index at the front
-//! (`+faststart`, so a browser starts playing before the whole file is loaded).
+//! (`+faststart`, so a browser starts playing before the whole file is loaded), optionally with
+//! the sound of another file from a given time (AAC; [`AudioTrack`]), so lip sync can be
+//! checked.
 //!
 //! The video is written to a temporary file beside the target (`preview.tmp.mp4` for
 //! `preview.mp4`) and renamed into place only when ffmpeg has exited successfully, so an
@@ -18,6 +20,14 @@ use std::thread::JoinHandle;
 use image::RgbImage;
 
 use crate::VideoError;
+
+/// The sound a video gets: the first audio stream of `path` from `start_s` seconds on, cut at
+/// the video's end. A file without sound gives a silent video.
+#[derive(Clone, Copy, Debug)]
+pub struct AudioTrack<'a> {
+    pub path: &'a Path,
+    pub start_s: f64,
+}
 
 /// Writes RGB8 frames of one size to an H.264 MP4 (see the module's docs).
 ///
@@ -53,6 +63,21 @@ impl VideoWriter {
         height: u32,
         fps: f64,
     ) -> Result<VideoWriter, VideoError> {
+        VideoWriter::create_with_audio(path, width, height, fps, None)
+    }
+
+    /// [`VideoWriter::create`] with the sound of `audio` (none: a silent video).
+    ///
+    /// # Errors
+    /// As [`VideoWriter::create`]; a sound file ffmpeg cannot read fails the encode, reported by
+    /// [`VideoWriter::finish`].
+    pub fn create_with_audio(
+        path: &Path,
+        width: u32,
+        height: u32,
+        fps: f64,
+        audio: Option<AudioTrack>,
+    ) -> Result<VideoWriter, VideoError> {
         let refuse = |reason: String| VideoError::Encode {
             path: path.to_owned(),
             reason,
@@ -68,10 +93,28 @@ impl VideoWriter {
             )));
         }
         let tmp = temporary_path(path);
-        let mut child = Command::new("ffmpeg")
+        let mut command = Command::new("ffmpeg");
+        command
             .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24"])
             .args(["-s", &format!("{width}x{height}"), "-r", &rate_string(fps)])
-            .args(["-i", "-", "-an", "-c:v", "libx264", "-pix_fmt", "yuv420p"])
+            .args(["-i", "-"]);
+        match audio {
+            Some(track) => {
+                // The sound's first stream if it has one ('?'), cut at the video's end.
+                command
+                    .args(["-ss", &format!("{:.6}", track.start_s.max(0.0)), "-i"])
+                    .arg(track.path)
+                    .args([
+                        "-map", "0:v:0", "-map", "1:a:0?", "-c:a", "aac", "-b:a", "128k",
+                    ])
+                    .arg("-shortest");
+            }
+            None => {
+                command.arg("-an");
+            }
+        }
+        let mut child = command
+            .args(["-c:v", "libx264", "-pix_fmt", "yuv420p"])
             .args([
                 "-crf",
                 "23",

@@ -26,7 +26,7 @@ mod frame;
 mod live_capture;
 mod source;
 
-pub use encoder::VideoWriter;
+pub use encoder::{AudioTrack, VideoWriter};
 pub use error::VideoError;
 pub use exif::{focal_length_35mm, focal_length_35mm_in};
 pub use ffmpeg::{ffmpeg_available, probe, VideoInfo, VideoReader};
