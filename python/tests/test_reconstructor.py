@@ -3,6 +3,7 @@ types, its errors, threads and memory."""
 
 from __future__ import annotations
 
+import json
 import os
 import threading
 from pathlib import Path
@@ -151,11 +152,19 @@ def test_bad_frames_options_and_inputs_raise_clear_exceptions(tmp_path):
 
 
 @needs_data
-def test_a_camera_matrix_sets_the_intrinsics():
+def test_a_camera_matrix_or_an_intrinsics_file_sets_the_camera(tmp_path):
+    image = frames(1)[0].image
     k = np.array([[400.0, 0.0, 240.0], [0.0, 410.0, 230.0], [0.0, 0.0, 1.0]])
     rec = visage.Reconstructor(intrinsics=k, models=MODELS)
-    rec.process(frames(1)[0].image)
+    rec.process(image)
     assert rec.intrinsics == (400.0, 410.0, 240.0, 230.0)
+    camera = tmp_path / "camera.json"
+    camera.write_text(json.dumps({"width": 480, "height": 480, "fx": 500.0, "fy": 500.0, "cx": 239.5, "cy": 239.5}))
+    rec = visage.Reconstructor(intrinsics=camera, models=MODELS)
+    rec.process(image)
+    assert rec.intrinsics == (500.0, 500.0, 239.5, 239.5)
+    with pytest.raises(visage.VisageError, match=r"camera.json: intrinsics are for another image size than the frames \(240×240\)"):
+        visage.Reconstructor(intrinsics=camera, models=MODELS).process(np.ascontiguousarray(image[::2, ::2]))
 
 
 @needs_data
