@@ -112,3 +112,21 @@ def test_run_refuses_what_the_command_line_refuses(tmp_path):
         visage.run(CLIP, tmp_path / "c", overwrite=True, resume=True)
     with pytest.raises(TypeError, match="glb"):
         visage.run(CLIP, tmp_path / "c", glb=True)
+
+
+@needs_data
+def test_run_sets_what_the_flags_set(tmp_path):
+    """Every option beside its flag: the run's recorded parameters, camera and frame selection
+    are the command line's (the two map options to the library each on their own)."""
+    cli, py = tmp_path / "cli", tmp_path / "py"
+    visage_cli("run", str(CLIP), "--out", str(cli), "--models", str(MODELS), "--quiet", "--max-frames", "3",
+               "--every", "2", "--fov-deg", "50", "--smoothing", "off", "--latency", "0", "--lambda", "2",
+               "--mu", "3", "--subdivision", "3", "--keypoints", "--fair", "2", "--mesh", "model",
+               "--depth", "model")
+    visage.run(CLIP, py, models=MODELS, max_frames=3, every=2, fov_deg=50.0, smoothing="off", latency=0,
+               lambda_=2.0, mu=3.0, subdivision=3, keypoints=True, fair=2.0, mesh="model", depth="model")
+    m_py, m_cli = (json.loads((d / "metrics.json").read_text()) for d in (py, cli))
+    for key in ("parameters", "intrinsics", "selection", "mesh"):
+        assert m_py[key] == m_cli[key], key
+    assert m_py["parameters"]["keypoint_motion"] and m_py["parameters"]["landmark_smoothing"] is None
+    assert (py / "blendshapes.csv").read_bytes() == (cli / "blendshapes.csv").read_bytes()
