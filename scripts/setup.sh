@@ -96,9 +96,11 @@ fi
 # model built into the module) so that its wheel carries them. The wheel is built and installed there: by
 # the test command with the test build's profile (scripts/test.sh), here optimised.
 py_venv="$target_dir/py-venv"
-if [ ! -x "$py_venv/bin/maturin" ] || ! "$py_venv/bin/python" -c "import pytest, numpy" >/dev/null 2>&1; then
+# OpenCV (headless) and matplotlib: the package's example (python/examples), run by its tests.
+if [ ! -x "$py_venv/bin/maturin" ] || ! "$py_venv/bin/python" -c "import pytest, numpy, cv2, matplotlib" >/dev/null 2>&1; then
   python3 -m venv "$py_venv"
-  "$py_venv/bin/pip" install -q --no-cache-dir maturin==1.16.0 pytest==9.2.0 numpy==2.4.6
+  "$py_venv/bin/pip" install -q --no-cache-dir maturin==1.16.0 pytest==9.2.0 numpy==2.4.6 \
+    opencv-python-headless==5.1.0.95 matplotlib==3.11.2
 fi
 rm -rf python/visage/models
 mkdir -p python/visage/models

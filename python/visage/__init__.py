@@ -10,9 +10,11 @@ The Rust library visage as a Python package::
         print(result.status, result.blendshapes.get("jawOpen"), result.head_angles)
 
 - :class:`Reconstructor` processes ``(H, W, 3)`` uint8 RGB frames one at a time (causally: each
-  frame's result as soon as it is given), with the GIL released while it works.
+  frame's result as soon as it is given; with ``latency`` frames of look-ahead through
+  :meth:`Reconstructor.push`), with the GIL released while it works.
+- :func:`run` is ``visage run`` as a call: a clip into an output folder, the same files.
 - :func:`open` reads a video, an image folder or an image as visage does.
-- :func:`read_run` loads a run folder written by ``visage run`` into numpy.
+- :func:`read_run` loads a run folder written by ``visage run`` (or :func:`run`) into numpy.
 
 Coordinates: camera coordinates, x right, y down, z forward, metres; pixel ``(i, j)``'s centre
 at ``(i, j)``. Errors from visage are :class:`VisageError`, with the command line's message.
@@ -22,15 +24,18 @@ from __future__ import annotations
 
 import csv
 import json
+import logging
 import os
 import struct
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Dict, Iterator, List, Optional, Tuple, Union
+from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from ._visage import ARKIT_BLENDSHAPES, NativeFrames, NativeReconstructor, VisageError
+from ._visage import run as _native_run
 
 __all__ = [
     "ARKIT_BLENDSHAPES",
@@ -38,9 +43,11 @@ __all__ = [
     "FrameResult",
     "Reconstructor",
     "RunData",
+    "RunResult",
     "VisageError",
     "open",
     "read_run",
+    "run",
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -80,8 +87,15 @@ class FrameResult:
     #: The fused metric face mesh ``(V, 3)`` float32, metres, camera coordinates; ``None``
     #: without a mesh. Vertex ``i < 468`` is FaceMesh landmark ``i``.
     vertices: Optional[np.ndarray]
-    #: The tracked 468 landmarks ``(468, 2)`` float32, frame pixels; ``None`` without a face.
+    #: ``(478, 2)`` float32, frame pixels, in MediaPipe's order (its ``refine_landmarks`` /
+    #: FaceLandmarker output): the 468 tracked landmarks, then the subject's right iris
+    #: (468: centre, 469–472: rim) and the left one (473: centre, 474–477: rim) from the iris
+    #: network. The ten iris rows are NaN when the irises are unknown for the frame (see
+    #: :attr:`has_irises`); ``None`` without a face.
     landmarks: Optional[np.ndarray]
+    #: Whether the iris rows of :attr:`landmarks` hold points: the iris network runs with the
+    #: face-model fit when its file (``iris_landmark.tflite``) is in the model folder.
+    has_irises: bool
     #: The 52 ARKit blendshape weights by name (empty without a face).
     blendshapes: Dict[str, float]
     #: The same in ARKit's order (:data:`ARKIT_BLENDSHAPES`), ``(52,)`` float32, or ``None``.
@@ -91,13 +105,34 @@ class FrameResult:
     #: Live Link Face's head ``(yaw, pitch, roll)`` in radians (yaw > 0 turning to the
     #: subject's right, pitch > 0 looking down), or ``None``.
     head_angles: Optional[Tuple[float, float, float]]
+    #: The face's identity as the fit has settled on it by this frame: weights of the face
+    #: model's identity modes (about N(0, 1) each a priori), ``(K,)`` float64; it firms up
+    #: over the first frames and stays the same person's. ``None`` before a face was fitted.
+    identity: Optional[np.ndarray]
     #: The frame's record as ``metrics.json`` has it (stage times in ``metrics["ms"]``).
     metrics: Dict[str, Any] = field(repr=False)
 
     @property
     def timings_ms(self) -> Dict[str, float]:
-        """Milliseconds per stage of this frame."""
+        """Milliseconds per stage of this frame, as ``metrics.json`` has them: ``decode``,
+        ``track`` (detection, landmarks, the smoother), ``fit`` (the metric fit, the face
+        model, the eyes), ``depth``, ``fuse``, ``write`` (the result's surfaces),
+        ``keypoints``."""
         return dict(self.metrics.get("ms", {}))
+
+
+#: A camera's intrinsics: an intrinsics JSON file (``visage run --intrinsics``'s), ``(fx, fy,
+#: cx, cy)`` in pixels, or OpenCV's ``(3, 3)`` camera matrix.
+IntrinsicsLike = Union[PathLike, Sequence[float], np.ndarray]
+
+
+def _check_frame(frame: Any) -> None:
+    if not isinstance(frame, np.ndarray):
+        raise ValueError(f"a frame is an (H, W, 3) uint8 RGB numpy array, not {type(frame).__name__}")
+    if frame.dtype != np.uint8:
+        raise ValueError(f"a frame is an (H, W, 3) uint8 RGB array; this one's dtype is {frame.dtype}")
+    if frame.ndim != 3 or frame.shape[2] != 3:
+        raise ValueError(f"a frame is an (H, W, 3) uint8 RGB array; this one's shape is {frame.shape}")
 
 
 class Reconstructor:
@@ -105,33 +140,77 @@ class Reconstructor:
 
     Args:
         fov_deg: the camera's horizontal field of view in degrees (default: visage's guess,
-            as ``visage run`` makes it).
+            60°, as ``visage run`` makes it for a video).
+        intrinsics: the camera instead: an intrinsics JSON file (``visage run --intrinsics``'s,
+            for the frames' size), ``(fx, fy, cx, cy)`` in pixels, or OpenCV's ``(3, 3)``
+            camera matrix. Not with ``fov_deg``.
+        mode: ``"streaming"`` (causal, frame by frame). ``"clip"`` — the exact minimiser over
+            a whole clip — needs every frame at once: :func:`run` with ``mode="clip"``.
+        latency: frames the landmark smoother waits for before it gives a frame out. 0 (the
+            default): :meth:`process` gives each frame's result at once. 1 or more: give frames
+            with :meth:`push`, which returns the frames it completed (with 1, the frame before;
+            each frame's landmarks then see where the motion went next, as ``visage run``'s
+            default ``--latency 1``), and call :meth:`end` after the last.
         models: folder of the model files (default: ``$VISAGE_MODELS``, else the wheel's own).
 
-    One reconstructor follows one video: its frames must keep one size. It is causal — each
-    frame's result comes at once — and keeps its state (the face's identity, the temporal
-    smoothing) from frame to frame. Use one per video, and one per thread.
+    One reconstructor follows one video: its frames must keep one size. It keeps its state
+    (the face's identity, the temporal smoothing) from frame to frame. Use one per video; a
+    reconstructor may be used from any thread, one call at a time, and two reconstructors on
+    two threads run at once.
     """
 
-    def __init__(self, fov_deg: Optional[float] = None, models: Optional[PathLike] = None) -> None:
-        self._native = NativeReconstructor(fov_deg, _models_dir(models))
+    def __init__(
+        self,
+        fov_deg: Optional[float] = None,
+        intrinsics: Optional[IntrinsicsLike] = None,
+        mode: str = "streaming",
+        latency: int = 0,
+        models: Optional[PathLike] = None,
+    ) -> None:
+        focal, file = None, None
+        if isinstance(intrinsics, (str, os.PathLike)):
+            file = os.fspath(intrinsics)
+        elif intrinsics is not None:
+            k = np.asarray(intrinsics, dtype=np.float64)
+            if k.shape == (3, 3):
+                focal = (k[0, 0], k[1, 1], k[0, 2], k[1, 2])
+            elif k.shape == (4,):
+                focal = tuple(float(x) for x in k)
+            else:
+                raise ValueError(
+                    f"intrinsics: a file, (fx, fy, cx, cy) or a (3, 3) camera matrix; this one's shape is {k.shape}"
+                )
+        self._native = NativeReconstructor(fov_deg, focal, file, mode, latency, _models_dir(models))
 
     def process(self, frame: np.ndarray, timestamp_s: Optional[float] = None) -> FrameResult:
-        """Processes one frame: an ``(H, W, 3)`` uint8 RGB array (OpenCV's frames are BGR:
-        ``frame[:, :, ::-1]``). ``timestamp_s``: its time in seconds, when known."""
-        if not isinstance(frame, np.ndarray):
-            raise ValueError(f"a frame is an (H, W, 3) uint8 RGB numpy array, not {type(frame).__name__}")
-        if frame.dtype != np.uint8:
-            raise ValueError(f"a frame is an (H, W, 3) uint8 RGB array; this one's dtype is {frame.dtype}")
-        if frame.ndim != 3 or frame.shape[2] != 3:
-            raise ValueError(f"a frame is an (H, W, 3) uint8 RGB array; this one's shape is {frame.shape}")
-        raw = self._native.process(frame, timestamp_s)
-        return _result(raw)
+        """Processes one frame and returns its result (``latency=0``, the default; else use
+        :meth:`push`): an ``(H, W, 3)`` uint8 RGB array (OpenCV's frames are BGR:
+        ``cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)``). ``timestamp_s``: its time in seconds,
+        when known (else the frames are taken 1/30 s apart)."""
+        _check_frame(frame)
+        return _result(self._native.process(frame, timestamp_s))
+
+    def push(self, frame: np.ndarray, timestamp_s: Optional[float] = None) -> List[FrameResult]:
+        """Gives one frame (as :meth:`process`) and returns the frames it completed, in input
+        order: with ``latency=1`` the frame before it (none after the first frame); at a cut
+        or a lost face also the frames held back. With ``latency=0``, this frame."""
+        _check_frame(frame)
+        return [_result(raw) for raw in self._native.push(frame, timestamp_s)]
+
+    def end(self) -> List[FrameResult]:
+        """The input has ended: the frames the smoother still held back, in input order."""
+        return [_result(raw) for raw in self._native.end()]
 
     @property
     def faces(self) -> Optional[np.ndarray]:
         """The mesh's triangles ``(F, 3)`` int32, once a frame had a mesh."""
         return self._native.triangles
+
+    @property
+    def uvs(self) -> Optional[np.ndarray]:
+        """The mesh's texture coordinates ``(V, 2)`` float32 (``mesh.obj``'s), once a frame
+        had a mesh."""
+        return self._native.uvs
 
     @property
     def intrinsics(self) -> Optional[Tuple[float, float, float, float]]:
@@ -149,11 +228,132 @@ def _result(raw: Dict[str, Any]) -> FrameResult:
         status=metrics.get("status", ""),
         vertices=raw["vertices"],
         landmarks=raw["landmarks"],
+        has_irises=raw["has_irises"],
         blendshapes=blendshapes,
         blendshape_array=weights,
         head_pose=raw["head_pose"],
         head_angles=None if head is None else tuple(float(a) for a in head),
+        identity=raw["identity"],
         metrics=metrics,
+    )
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """What :func:`run` did (the files are in ``out_dir``: :func:`read_run` loads them)."""
+
+    out_dir: Path
+    #: Frames this call processed (a resumed run's warm-up included).
+    frames: int
+    #: Frames of the folder's run with a mesh (a resumed run's earlier ones included).
+    meshed: int
+    #: Frames the folder's files hold.
+    kept: int
+    #: The run's summary as ``metrics.json`` has it (frames per second, peak memory, the
+    #: quality figures, per-stage times); ``None`` when ``resume=True`` found the run complete.
+    summary: Optional[Dict[str, Any]] = field(repr=False)
+
+
+_log = logging.getLogger("visage")
+
+
+def _notify(kind: str, message: str) -> None:
+    """Where :func:`run`'s warnings (a face lost, other faces in view) and notices (what a
+    resumed run kept) go: :mod:`warnings` and the ``visage`` logger."""
+    if kind == "warning":
+        warnings.warn(message, RuntimeWarning, stacklevel=3)
+    else:
+        _log.info(message)
+
+
+def run(
+    input: PathLike,  # noqa: A002 - the command line's INPUT
+    out_dir: PathLike,
+    *,
+    progress: Optional[Callable[[int, Optional[int]], Any]] = None,
+    intrinsics: Optional[PathLike] = None,
+    fov_deg: Optional[float] = None,
+    depth: Optional[str] = None,
+    depth_config: Optional[PathLike] = None,
+    depth_scale: Optional[float] = None,
+    lambda_: Optional[float] = None,
+    mu: Optional[float] = None,
+    smoothing: Optional[Union[float, str]] = None,
+    latency: Optional[int] = None,
+    mesh: Optional[str] = None,
+    mode: Optional[str] = None,
+    subdivision: Optional[int] = None,
+    fair: Optional[float] = None,
+    keypoints: bool = False,
+    spacing: Optional[int] = None,
+    every: Optional[int] = None,
+    max_frames: Optional[int] = None,
+    models: Optional[PathLike] = None,
+    model: Optional[PathLike] = None,
+    no_fit: bool = False,
+    ply: bool = False,
+    save_raw: bool = False,
+    ascii: bool = False,  # noqa: A002 - the command line's --ascii
+    overwrite: bool = False,
+    resume: bool = False,
+) -> RunResult:
+    """``visage run INPUT --out OUT_DIR [options]`` as a call: the same files in ``out_dir``
+    (``sequence.pc2`` with ``mesh.obj``, ``landmarks.json``, ``blendshapes.csv``,
+    ``camera.json``, ``metrics.json``; PLYs with ``ply``/``save_raw``), the same errors
+    (:class:`VisageError`, with the command line's message).
+
+    The options are the flags' (``visage run --help`` says what each does), snake_case:
+    ``fov_deg`` is ``--fov-deg``, ``lambda_`` is ``--lambda``, ``smoothing`` a number or
+    ``"off"``; ``None`` is the flag's default. Not here: ``--rgbd`` and its flags,
+    ``--faces all``, ``--quiet`` (nothing is printed) and the exports (``--glb``,
+    ``--texture``, ``--plots``, ``--report``, ``--preview``: ``visage export OUT_DIR`` makes
+    them from the folder).
+
+    ``progress(frames_done, frames_total)`` is called after every frame (``frames_total`` is
+    ``None`` when the input does not say), with the GIL held only for the call; if it raises,
+    the run stops as after Ctrl-C — the frames so far are written and ``metrics.json`` says
+    ``"interrupted"`` — and its exception is raised. Ctrl-C does the same
+    (:class:`KeyboardInterrupt`). Warnings go to :mod:`warnings`, notices (what ``overwrite``
+    removed, what a resume kept) to the ``visage`` logger.
+    """
+    raw = _native_run(
+        os.fspath(input),
+        os.fspath(out_dir),
+        _notify,
+        progress,
+        intrinsics=None if intrinsics is None else os.fspath(intrinsics),
+        fov_deg=fov_deg,
+        depth=depth,
+        depth_config=None if depth_config is None else os.fspath(depth_config),
+        depth_scale=depth_scale,
+        lambda_=lambda_,
+        mu=mu,
+        smoothing=None if smoothing is None else str(smoothing),
+        latency=latency,
+        mesh=mesh,
+        mode=mode,
+        subdivision=subdivision,
+        fair=fair,
+        keypoints=keypoints,
+        spacing=spacing,
+        every=every,
+        max_frames=max_frames,
+        models=_models_dir(models),
+        model=None if model is None else os.fspath(model),
+        no_fit=no_fit,
+        ply=ply,
+        save_raw=save_raw,
+        ascii=ascii,
+        overwrite=overwrite,
+        resume=resume,
+    )
+    summary = raw["summary_json"]
+    return RunResult(
+        out_dir=Path(out_dir),
+        frames=raw["frames"],
+        meshed=raw["meshed"],
+        kept=raw["kept"],
+        summary=None if summary is None else json.loads(summary),
     )
 
 

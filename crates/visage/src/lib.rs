@@ -77,7 +77,7 @@ pub use input::{FrameFilter, Input, KeptFrames};
 pub use landmark_reader::{FrameFaces, LandmarkReader};
 pub use reconstructor::{error_chain, FrameResult, Identity, Reconstructor, RunOutcome};
 pub use sink::{FrameSink, MeshFrame};
-pub use stages::Surfaces;
+pub use stages::{Irises, Surfaces};
 
 pub use visage_camera::{DepthKind, Intrinsics, RigidTransform, DEFAULT_FOV_DEG};
 pub use visage_depth::{

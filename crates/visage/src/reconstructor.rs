@@ -17,7 +17,7 @@ use crate::depth_stage::DepthStage;
 use crate::keypoint_motion::KeypointMotion;
 use crate::pipeline::{run_stages, Stages};
 use crate::recorder::Recorder;
-use crate::stages::{FaceStage, FuseStage, FusedDepth, ModelStage, Surfaces, Tracked};
+use crate::stages::{FaceStage, FuseStage, FusedDepth, Irises, ModelStage, Surfaces, Tracked};
 use crate::{DepthSource, Error, FrameSink, Input, TemporalMode};
 use visage_face::CutDetector;
 use visage_face::{
@@ -53,6 +53,7 @@ pub struct Reconstructor {
     landmarks: Option<LandmarksFrame>,
     warning: Option<String>,
     blendshapes: Option<BlendshapeFrame>,
+    irises: Option<Irises>,
     /// Frames [`Reconstructor::push`] tracked, waiting for the rest of the pipeline.
     pending: VecDeque<(Tracked, Frame)>,
 }
@@ -68,6 +69,8 @@ pub struct FrameResult<'a> {
     pub warning: Option<&'a str>,
     /// ARKit blendshape weights and head rotation of the morphable-model fit.
     pub blendshapes: Option<&'a BlendshapeFrame>,
+    /// The irises, when the model is fitted and the iris network's file is present.
+    pub irises: Option<&'a Irises>,
     mesh: Option<&'a TriMesh>,
     surfaces: Option<&'a Surfaces>,
 }
@@ -337,6 +340,7 @@ impl Reconstructor {
             landmarks: None,
             warning: None,
             blendshapes: None,
+            irises: None,
             pending: VecDeque::new(),
         })
     }
@@ -354,6 +358,18 @@ impl Reconstructor {
     /// Vertices of the mesh (the image-plane mesh: 0 before its first face).
     pub fn vertex_count(&self) -> usize {
         self.fuse.fusion.vertex_count()
+    }
+
+    /// The identity the fit has settled on so far (frame by frame, it firms up over the first
+    /// frames); `None` before the model was fitted to a frame, or without the model.
+    pub fn identity(&self) -> Option<Identity> {
+        let (model, stage) = self.model.as_ref().zip(self.model_stage.as_ref())?;
+        let fitter = &stage.fitter;
+        (fitter.identity_frames() > 0).then(|| Identity {
+            coefficients: fitter.identity().to_vec(),
+            frames: fitter.identity_frames(),
+            model: Arc::clone(model),
+        })
     }
 
     /// The records of the frames processed so far, in input order.
@@ -446,6 +462,7 @@ impl Reconstructor {
         }
         self.warning = tracked.warning;
         self.blendshapes = tracked.blendshapes;
+        self.irises = tracked.irises;
         let landmarks = self.landmarks.insert(tracked.landmarks);
         if has_mesh {
             landmarks.set_fused(&self.face.k, &self.surfaces.fused_landmarks);
@@ -455,6 +472,7 @@ impl Reconstructor {
             landmarks,
             warning: self.warning.as_deref(),
             blendshapes: self.blendshapes.as_ref(),
+            irises: self.irises.as_ref(),
             mesh: has_mesh.then_some(&self.mesh),
             surfaces: has_mesh.then_some(&self.surfaces),
         })
@@ -470,14 +488,7 @@ impl Reconstructor {
         cpu_at_start: Option<f64>,
         error: Option<Error>,
     ) -> RunOutcome {
-        let identity = self.model.zip(self.model_stage).and_then(|(model, stage)| {
-            let fitter = &stage.fitter;
-            (fitter.identity_frames() > 0).then(|| Identity {
-                coefficients: fitter.identity().to_vec(),
-                frames: fitter.identity_frames(),
-                model,
-            })
-        });
+        let identity = self.identity();
         let timing = RunTiming {
             wall_s: started.elapsed().as_secs_f64(),
             setup_ms: self.setup_ms,

@@ -12,7 +12,7 @@ use visage_camera::RigidTransform;
 use visage_camera::{DepthKind, DepthMap, Intrinsics};
 use visage_face::{
     fit_face_geometry, CanonicalMesh, Eye, EyeLandmarks, Eyes, Face, FaceGeometry, FaceTracker,
-    IrisLandmarker,
+    IrisLandmarker, NUM_IRIS_POINTS,
 };
 use visage_fusion::{ClipFrame, FaceFrame, FusedSurfaces, MeshKind, ModelFrame, SurfaceFusion};
 use visage_mesh::TriMesh;
@@ -55,6 +55,8 @@ pub(crate) struct Tracked {
     pub warning: Option<String>,
     /// The morphable-model fit's blendshape record (when the model is fitted and a face was).
     pub blendshapes: Option<BlendshapeFrame>,
+    /// The irises the eye network found, when it ran ([`Irises`]).
+    pub irises: Option<Irises>,
     /// The fitted model's surface, when the model mesh or the model depth needs it.
     pub model: Option<FittedModel>,
     /// The frame starts a new shot: the temporal terms restart here.
@@ -63,6 +65,11 @@ pub(crate) struct Tracked {
     /// depth source gives one.
     pub depth_map: Option<DepthMap>,
 }
+
+/// Both irises, the subject's right eye then the left (MediaPipe's refined landmarks 468–472
+/// and 473–477, in that order): each the iris network's centre, then the four rim points
+/// ([`EyeLandmarks::iris`]'s order), `[x, y]` frame pixels.
+pub type Irises = [[[f64; 2]; NUM_IRIS_POINTS]; 2];
 
 /// The morphable model fitted to a frame, as a surface.
 pub(crate) struct FittedModel {
@@ -140,6 +147,8 @@ impl ModelStage {
                 right: right.map_err(eye_error)?,
                 left: left.map_err(eye_error)?,
             };
+            let rim = |eye: &EyeLandmarks| eye.iris.map(|p| [p[0] as f64, p[1] as f64]);
+            tracked.irises = Some([rim(&eyes.right), rim(&eyes.left)]);
             let points = self.fitter.landmark_points();
             let observe = |eye: &EyeLandmarks, corners: [usize; 2]| {
                 let c = eye.iris_center();
@@ -401,6 +410,7 @@ impl FaceStage {
             },
             warning,
             blendshapes: None,
+            irises: None,
             model: None,
             cut,
             depth_map: None,
