@@ -321,3 +321,39 @@ fn the_preview_keeps_the_inputs_sound_in_step_with_the_frames() {
         }
     }
 }
+
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files, ffmpeg)),
+    ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
+)]
+fn the_reports_contact_sheet_shows_the_sample_clips_two_blinks() {
+    let models = visage_testdata::require(visage_testdata::models_dir());
+    let clip =
+        visage_testdata::require(visage_testdata::shared_dir().join("data/video/lp_d18.mp4"));
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    run_ok(&[
+        "run",
+        s(&clip),
+        "--out",
+        s(&out),
+        "--report",
+        "--models",
+        s(&models),
+    ]);
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    // The subject closes both eyes over frames 94–98 and 185–188 (checked by eye).
+    // Each caption is written twice (the picture's alt text and its caption).
+    let mut blinks: Vec<usize> = html
+        .match_indices("blink · frame ")
+        .filter_map(|(at, m)| {
+            let rest = &html[at + m.len()..];
+            rest[..rest.find(' ')?].parse().ok()
+        })
+        .collect();
+    blinks.dedup();
+    assert_eq!(blinks.len(), 2, "{blinks:?}");
+    assert!((94..=98).contains(&blinks[0]), "{blinks:?}");
+    assert!((185..=188).contains(&blinks[1]), "{blinks:?}");
+}

@@ -298,3 +298,32 @@ fn first_meshed<'a>(frames: &[CaptureFrame], surfaces: &'a [f32]) -> &'a [f32] {
     let n = surfaces.len() / frames.len().max(1);
     &surfaces[n * k..n * (k + 1)]
 }
+
+/// A capture of `n` meshed frames at 30 fps over a one-triangle mesh, for tests.
+#[cfg(test)]
+pub(crate) fn synthetic(n: usize, metrics: Value, blendshapes: Option<Blendshapes>) -> Capture {
+    Capture {
+        dir: PathBuf::new(),
+        intrinsics: Intrinsics {
+            width: 64,
+            height: 64,
+            fx: 60.0,
+            fy: 60.0,
+            cx: 32.0,
+            cy: 32.0,
+        },
+        input: PathBuf::new(),
+        mesh: TriMesh::new(vec![[0.0; 3]; 3], vec![[0, 1, 2]]),
+        frames: (0..n)
+            .map(|index| CaptureFrame {
+                index,
+                time_s: index as f64 / 30.0,
+                meshed: true,
+                pose: None,
+            })
+            .collect(),
+        surfaces: vec![0.0; 9 * n],
+        blendshapes,
+        metrics,
+    }
+}

@@ -14,6 +14,7 @@ mod capture;
 mod error;
 mod frame_renders;
 mod glb;
+mod moments;
 mod morph_animation;
 mod plots;
 mod preview;

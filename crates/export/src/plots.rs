@@ -280,42 +280,11 @@ fn blendshapes(capture: &Capture) -> Option<Plot> {
 
 #[cfg(test)]
 mod tests {
-    use std::path::PathBuf;
-
     use serde_json::json;
-    use visage_camera::Intrinsics;
-    use visage_mesh::TriMesh;
 
     use super::*;
-    use crate::{Blendshapes, CaptureFrame};
-
-    /// A capture of `n` frames at 30 fps with `metrics` and, optionally, blendshape curves.
-    fn capture(n: usize, metrics: Value, blendshapes: Option<Blendshapes>) -> Capture {
-        Capture {
-            dir: PathBuf::new(),
-            intrinsics: Intrinsics {
-                width: 64,
-                height: 64,
-                fx: 60.0,
-                fy: 60.0,
-                cx: 32.0,
-                cy: 32.0,
-            },
-            input: PathBuf::new(),
-            mesh: TriMesh::new(vec![[0.0; 3]; 3], vec![[0, 1, 2]]),
-            frames: (0..n)
-                .map(|index| CaptureFrame {
-                    index,
-                    time_s: index as f64 / 30.0,
-                    meshed: true,
-                    pose: None,
-                })
-                .collect(),
-            surfaces: vec![0.0; 9 * n],
-            blendshapes,
-            metrics,
-        }
-    }
+    use crate::capture::synthetic as capture;
+    use crate::Blendshapes;
 
     #[test]
     fn a_full_run_has_every_chart() {

@@ -1,5 +1,6 @@
 //! `report.html`: one self-contained page that opens offline by double-click — the run's summary
-//! numbers, renders of a few frames, the per-frame charts and a three.js viewer playing the
+//! numbers, the take's moments (blinks, cuts, the strongest expressions) beside their source
+//! frames, the per-frame charts and a three.js viewer playing the
 //! animated glb. Browsers refuse `fetch` and module imports from `file://` pages, so the
 //! viewer's code (one classic script bundled from `web/viewer` at build time) and the glb
 //! (base64) are inside the page.
@@ -84,7 +85,7 @@ pub fn report_html(
     }
     h.push_str("</table></section></div>\n");
     if !renders.is_empty() {
-        h.push_str("<section><h2>Frames</h2><div class=\"grid\">\n");
+        h.push_str("<section><h2>Moments: blinks, cuts and the strongest expressions</h2><p class=\"sub\">Each beside its source frame.</p><div class=\"grid\">\n");
         for r in renders {
             let _ = writeln!(
                 h,
@@ -261,7 +262,7 @@ padding:0 1em;color:#222}.top{display:flex;flex-wrap:wrap;gap:2em;align-items:fl
 .top>section{flex:1 1 480px;min-width:0}h1{font-size:1.5em;margin-bottom:.2em}.sub{color:#666;margin-top:0}\
 table{border-collapse:collapse}th,td{padding:.25em .8em;border-bottom:1px solid #ddd;\
 text-align:left;vertical-align:top}th{font-weight:500;color:#444}\
-.grid{display:flex;flex-wrap:wrap;gap:1em}figure{margin:0}figure img{max-width:340px;\
+.grid{display:flex;flex-wrap:wrap;gap:1em}figure{margin:0}figure img{max-width:420px;\
 border:1px solid #ccc}figure.chart{flex:1 1 540px;min-width:0}figure svg{display:block;\
 width:100%;height:auto}figcaption{color:#666;\
 font-size:.9em}#visage-viewer{max-width:640px}";
