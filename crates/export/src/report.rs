@@ -12,7 +12,7 @@ use serde_json::Value;
 use crate::capture::Capture;
 use crate::plots::Plot;
 use crate::ExportSummary;
-use visage_run_folder::file_names;
+use visage_run_folder::{file_names, FILE_GUIDE, PER_FRAME_MESHES};
 
 /// The viewer bundle (`web/viewer/dist/viewer.js`), when it was built before visage.
 #[cfg(viewer_bundle)]
@@ -84,6 +84,11 @@ pub fn report_html(
         );
     }
     h.push_str("</table></section></div>\n");
+    h.push_str("<section><h2>Warnings</h2><ul>\n");
+    for w in warnings(m) {
+        let _ = writeln!(h, "<li>{}</li>", escape(&w));
+    }
+    h.push_str("</ul></section>\n");
     if !renders.is_empty() {
         h.push_str("<section><h2>Moments: blinks, cuts and the strongest expressions</h2><p class=\"sub\">Each beside its source frame.</p><div class=\"grid\">\n");
         for r in renders {
@@ -104,27 +109,27 @@ pub fn report_html(
         }
         h.push_str("</div></section>\n");
     }
-    h.push_str("<section><h2>Files</h2><ul>\n");
-    for f in &summary.files {
+    h.push_str(
+        "<section><h2>Files and where they go</h2><table>\n\
+         <tr><th>file</th><th>holds</th><th>goes to</th></tr>\n",
+    );
+    for row in FILE_GUIDE.iter().chain([&PER_FRAME_MESHES]) {
+        let path = capture.dir.join(row.file);
+        let size = match std::fs::metadata(&path) {
+            Ok(m) if m.is_file() => format!(" ({:.2} MB)", m.len() as f64 / 1e6),
+            Ok(_) => String::new(),
+            Err(_) => continue,
+        };
         let _ = writeln!(
             h,
-            "<li><a href=\"{0}\">{0}</a> — {1:.2} MB</li>",
-            escape(&f.file),
-            f.bytes as f64 / 1e6
+            "<tr><td><a href=\"{0}\">{0}</a>{1}</td><td>{2}</td><td>{3}</td></tr>",
+            escape(row.file),
+            size,
+            escape(row.holds),
+            escape(row.goes_to)
         );
     }
-    for f in [
-        file_names::POINT_CACHE,
-        file_names::CACHE_MESH,
-        file_names::BLENDSHAPES_CSV,
-        file_names::METRICS,
-        file_names::LANDMARKS,
-    ] {
-        if capture.dir.join(f).is_file() {
-            let _ = writeln!(h, "<li><a href=\"{f}\">{f}</a></li>");
-        }
-    }
-    h.push_str("</ul></section>\n");
+    h.push_str("</table></section>\n");
     if let Some((js, _)) = viewer {
         // The bundle is inlined as a classic script; it must not close the tag early.
         let _ = writeln!(
@@ -135,6 +140,76 @@ pub fn report_html(
     }
     h.push_str("</body></html>\n");
     h
+}
+
+/// What a user should know before using the take: stretches of frames without a face or
+/// without data (their meshes carry the last solved surface), and shot cuts; one line saying
+/// so when there is none.
+fn warnings(m: &Value) -> Vec<String> {
+    let frames = m["frames"]
+        .as_array()
+        .map(Vec::as_slice)
+        .unwrap_or_default();
+    let mut out = Vec::new();
+    for (status, what) in [
+        ("no_face", "no face was found"),
+        ("no_data", "no depth data"),
+        ("carried", "the mesh carries the last solved surface"),
+    ] {
+        let indices: Vec<u64> = frames
+            .iter()
+            .filter(|f| f["status"] == status)
+            .filter_map(|f| f["index"].as_u64())
+            .collect();
+        if !indices.is_empty() {
+            out.push(format!(
+                "{} frame{}: {what} ({})",
+                indices.len(),
+                if indices.len() == 1 { "" } else { "s" },
+                ranges(&indices)
+            ));
+        }
+    }
+    let cuts: Vec<u64> = m["summary"]["cuts"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(Value::as_u64)
+        .collect();
+    if !cuts.is_empty() {
+        out.push(format!(
+            "shot cut{} at frame{} {}: the tracker started again (the curves jump there)",
+            if cuts.len() == 1 { "" } else { "s" },
+            if cuts.len() == 1 { "" } else { "s" },
+            ranges(&cuts)
+        ));
+    }
+    if out.is_empty() {
+        out.push("None: every frame has a face and its own surface, and there is no cut.".into());
+    }
+    out
+}
+
+/// Sorted indices as runs: "3, 10–14, 20".
+fn ranges(indices: &[u64]) -> String {
+    let mut runs: Vec<(u64, u64)> = Vec::new();
+    for &i in indices {
+        match runs.last_mut() {
+            Some((_, end)) if *end + 1 == i => *end = i,
+            _ => runs.push((i, i)),
+        }
+    }
+    let runs: Vec<String> = runs
+        .iter()
+        .map(|&(a, b)| {
+            if a == b {
+                format!("{a}")
+            } else {
+                format!("{a}–{b}")
+            }
+        })
+        .collect();
+    runs.join(", ")
 }
 
 /// The summary table: what a user checks first.
@@ -270,6 +345,30 @@ font-size:.9em}#visage-viewer{max-width:640px}";
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn warnings_name_the_stretches_without_a_face_and_the_cuts() {
+        let frames: Vec<Value> = (0..12)
+            .map(|i| {
+                let status = if (3..=5).contains(&i) || i == 9 {
+                    "no_face"
+                } else {
+                    "solved"
+                };
+                serde_json::json!({"index": i, "status": status})
+            })
+            .collect();
+        let m = serde_json::json!({"frames": frames, "summary": {"cuts": [7]}});
+        assert_eq!(
+            warnings(&m),
+            [
+                "4 frames: no face was found (3–5, 9)",
+                "shot cut at frame 7: the tracker started again (the curves jump there)"
+            ]
+        );
+        let clean = serde_json::json!({"frames": [{"index": 0, "status": "solved"}]});
+        assert!(warnings(&clean)[0].starts_with("None"));
+    }
 
     #[test]
     fn base64_matches_the_standard_vectors() {

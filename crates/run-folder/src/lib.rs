@@ -14,6 +14,7 @@
 
 mod atomic_write;
 mod blendshapes_json;
+mod file_guide;
 pub mod file_names;
 mod folder;
 mod folder_lock;
@@ -33,6 +34,7 @@ mod error;
 pub use atomic_write::{tmp_path, write_atomically, write_json_atomically};
 pub use blendshapes_json::BlendshapesJsonWriter;
 pub use error::RunFolderError;
+pub use file_guide::{FileUse, FILE_GUIDE, PER_FRAME_MESHES};
 pub use folder::{claim, clear_outputs, inspect, Claimed, Cleared, FolderContents};
 pub use folder_lock::{FolderLock, LockHolder};
 pub use input_file::{sha256_of, InputFile};
