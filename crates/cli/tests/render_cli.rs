@@ -59,6 +59,33 @@ fn renders_depth_that_fuse_reads_and_colours_projectively() {
 }
 
 #[test]
+fn a_turntable_does_not_show_an_open_surface_from_behind() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let k = Intrinsics::new(32, 24, 30.0, 30.0, 15.5, 11.5).unwrap();
+    k.save_json(&d.join("cam.json")).unwrap();
+    // A small open square facing the camera (wound as visage's face meshes are), seen from the
+    // front and, half a turn later, from behind.
+    std::fs::write(
+        d.join("square.obj"),
+        "v -0.1 -0.1 0.8\nv 0.1 -0.1 0.8\nv 0.1 0.1 0.8\nv -0.1 0.1 0.8\nf 1 4 3 2\n",
+    )
+    .unwrap();
+    let o = render(d, "square.obj", &["--views", "turntable:2"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let drawn = |view: usize| {
+        let png = d.join(format!("c_{view:03}.png"));
+        let image = image::open(&png).unwrap().to_rgb8();
+        image.pixels().filter(|p| p.0 != [0, 0, 0]).count()
+    };
+    let (front, back) = (drawn(0), drawn(1));
+    assert!(
+        front > 0 && back == 0,
+        "pixels drawn: front {front}, back {back}"
+    );
+}
+
+#[test]
 fn bad_inputs_are_errors_that_name_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

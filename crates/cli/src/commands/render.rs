@@ -57,7 +57,9 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = DepthKindArg::Z)]
     pub depth_kind: DepthKindArg,
     /// Several views, e.g. `turntable:8` (spin about the vertical axis through the mesh centre);
-    /// outputs get a `_NNN` suffix.
+    /// outputs get a `_NNN` suffix. The views discard triangles facing away from the camera (as
+    /// --cull-back): a face mesh is an open mask, whose inside seen from behind would look like
+    /// a face.
     #[arg(long)]
     pub views: Option<String>,
     /// Multiply mesh coordinates by this factor first (e.g. 0.01 for a mesh in centimetres).
@@ -170,7 +172,8 @@ impl RenderConfig {
             },
             views,
             unlit: args.unlit,
-            cull: if args.cull_back {
+            // A reconstructed face is an open mask: from behind, its lit inside reads as a face.
+            cull: if args.cull_back || args.views.is_some() {
                 CullMode::Back
             } else {
                 CullMode::None
