@@ -33,6 +33,9 @@ pub struct Blendshapes {
     /// Per processed frame (as [`Capture::frames`]), the weights; `None` where the frame has
     /// none.
     pub weights: Vec<Option<Vec<f32>>>,
+    /// Per processed frame, the head's yaw, pitch and roll (radians, Live Link Face's angles);
+    /// `None` where the frame has none.
+    pub head: Vec<Option<[f32; 3]>>,
 }
 
 /// A run's output folder, read back.
@@ -284,11 +287,23 @@ fn parse_blendshapes(
         if w.len() != names.len() {
             return Err(malformed("a frame's weights do not match the names"));
         }
-        by_index.insert(index as usize, w);
+        let head = f["head"].as_array().and_then(|h| {
+            let angle = |i: usize| Some(h.get(i)?.as_f64()? as f32);
+            Some([angle(0)?, angle(1)?, angle(2)?])
+        });
+        by_index.insert(index as usize, (w, head));
     }
+    let (weights, head) = frames
+        .iter()
+        .map(|f| match by_index.remove(&f.index) {
+            Some((w, head)) => (Some(w), head),
+            None => (None, None),
+        })
+        .unzip();
     Ok(Blendshapes {
         names,
-        weights: frames.iter().map(|f| by_index.remove(&f.index)).collect(),
+        weights,
+        head,
     })
 }
 

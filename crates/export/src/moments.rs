@@ -183,7 +183,12 @@ mod tests {
             })
             .collect();
         let metrics = json!({"summary": {"cuts": [200]}});
-        let capture = synthetic(n, metrics, Some(Blendshapes { names, weights }));
+        let shapes = Blendshapes {
+            names,
+            weights,
+            head: vec![None; n],
+        };
+        let capture = synthetic(n, metrics, Some(shapes));
         let found: Vec<(usize, MomentKind)> = moments(&capture)
             .iter()
             .map(|m| (m.frame, m.kind))

@@ -46,13 +46,15 @@ pub fn run_plots(capture: &Capture, landmarks: Option<&Value>) -> Vec<Plot> {
         .filter_map(|f| Some((time_of(f, &times)?, f)))
         .collect();
     let summary = &capture.metrics["summary"];
+    // What the take's user reads first (the curves, the head), then the technical figures.
     [
+        blendshapes(capture),
+        head_motion(capture),
         stage_times(&frames),
         fps(&frames, summary),
         curvature(&frames),
         roughness(&frames),
         landmarks.and_then(|l| jitter(l, &times)),
-        blendshapes(capture),
     ]
     .into_iter()
     .flatten()
@@ -278,6 +280,22 @@ fn blendshapes(capture: &Capture) -> Option<Plot> {
     chart("blendshapes.svg", title, "weight", series)
 }
 
+/// The head's yaw, pitch and roll over the take, in degrees.
+fn head_motion(capture: &Capture) -> Option<Plot> {
+    let b = capture.blendshapes.as_ref()?;
+    let series: Vec<XySeries> = ["yaw", "pitch", "roll"]
+        .iter()
+        .enumerate()
+        .map(|(axis, name)| {
+            let points = (capture.frames.iter().zip(&b.head))
+                .filter_map(|(f, h)| Some((f.time_s, h.as_ref()?[axis].to_degrees() as f64)))
+                .collect();
+            curve(*name, points)
+        })
+        .collect();
+    chart("head.svg", "Head motion".into(), "degrees", series)
+}
+
 #[cfg(test)]
 mod tests {
     use serde_json::json;
@@ -319,24 +337,34 @@ mod tests {
                 )
             })
             .collect();
-        let c = capture(n, metrics, Some(Blendshapes { names, weights }));
+        let head = (0..n).map(|k| Some([0.01 * k as f32, 0.2, 0.0])).collect();
+        let c = capture(
+            n,
+            metrics,
+            Some(Blendshapes {
+                names,
+                weights,
+                head,
+            }),
+        );
         let plots = run_plots(&c, Some(&landmarks));
         let files: Vec<&str> = plots.iter().map(|p| p.file).collect();
         assert_eq!(
             files,
             [
+                "blendshapes.svg",
+                "head.svg",
                 "stage_times.svg",
                 "fps.svg",
                 "curvature.svg",
                 "roughness.svg",
                 "jitter.svg",
-                "blendshapes.svg"
             ]
         );
         assert!(plots.iter().all(|p| p.svg.starts_with("<svg")));
-        assert!(plots[1].title.contains("1.50 cores"));
+        assert!(plots[3].title.contains("1.50 cores"));
         // The 8 shapes that move most are shape2..shape9, not the pinned shape1.
-        let shapes = &plots[5].svg;
+        let shapes = &plots[0].svg;
         let named = |name: &str| shapes.lines().any(|l| l.trim() == name);
         assert!(named("shape9") && named("shape2"));
         assert!(!named("shape0") && !named("shape1"));
@@ -368,6 +396,7 @@ mod tests {
         let shapes = Blendshapes {
             names: vec!["a".into(), "b".into()],
             weights: vec![Some(vec![]), None, Some(vec![f32::NAN, 1.0])],
+            head: vec![None, Some([f32::NAN, 0.0, 1.0]), None],
         };
         let c = capture(3, metrics, Some(shapes));
         let plots = run_plots(&c, Some(&landmarks));

@@ -103,7 +103,7 @@ pub fn report_html(
         h.push_str("</div></section>\n");
     }
     if !plots.is_empty() {
-        h.push_str("<section><h2>Per frame</h2><div class=\"grid\">\n");
+        h.push_str("<section><h2>Curves: the face, the head, then the run</h2><div class=\"grid\">\n");
         for p in plots {
             let _ = writeln!(h, "<figure class=\"chart\">{}</figure>", p.svg);
         }
