@@ -250,11 +250,14 @@ fn second_difference_rms(frames: [&[[f64; 2]]; 3]) -> Option<f64> {
     (count > 0).then(|| (sum / count as f64).sqrt())
 }
 
-/// The blendshapes that move most over the clip: by their motion, the mean of |Δw| from frame
-/// to frame, so a shape that sits near a bound (a weight pinned at 1 with a few drops has a
-/// large range) does not push out the jaw, the blinks and the smiles that carry the take.
-fn blendshapes(capture: &Capture) -> Option<Plot> {
-    let b = capture.blendshapes.as_ref()?;
+/// The blendshapes by how much they move over the clip, most first: the mean of |Δw| from
+/// frame to frame, so a shape that sits near a bound (a weight pinned at 1 with a few drops
+/// has a large range) does not push out the jaw, the blinks and the smiles that carry the take.
+/// Each with its (time, weight) points.
+pub(crate) fn shapes_by_motion(capture: &Capture) -> Vec<(f64, XySeries)> {
+    let Some(b) = capture.blendshapes.as_ref() else {
+        return Vec::new();
+    };
     let mut curves: Vec<(f64, XySeries)> = (0..b.names.len())
         .map(|i| {
             let points: Vec<(f64, f64)> = (capture.frames.iter().zip(&b.weights))
@@ -271,7 +274,13 @@ fn blendshapes(capture: &Capture) -> Option<Plot> {
         .filter(|(motion, _)| motion.is_finite())
         .collect();
     curves.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let series = curves
+    curves
+}
+
+/// The [`BLENDSHAPE_CURVES`] blendshapes that move most ([`shapes_by_motion`]).
+fn blendshapes(capture: &Capture) -> Option<Plot> {
+    capture.blendshapes.as_ref()?;
+    let series = shapes_by_motion(capture)
         .into_iter()
         .take(BLENDSHAPE_CURVES)
         .map(|c| c.1)

@@ -10,7 +10,8 @@ use std::fmt::Write as _;
 use serde_json::Value;
 
 use crate::capture::Capture;
-use crate::plots::Plot;
+use crate::moments::{moments, MomentKind};
+use crate::plots::{shapes_by_motion, Plot};
 use crate::ExportSummary;
 use visage_run_folder::{file_names, FILE_GUIDE, PER_FRAME_MESHES};
 
@@ -75,7 +76,10 @@ pub fn report_html(
         ),
     }
     h.push_str("<section><h2>Summary</h2><table>\n");
-    for (label, value) in summary_rows(m, summary) {
+    for (label, value) in take_rows(capture)
+        .into_iter()
+        .chain(summary_rows(m, summary))
+    {
         let _ = writeln!(
             h,
             "<tr><th>{}</th><td>{}</td></tr>",
@@ -103,7 +107,9 @@ pub fn report_html(
         h.push_str("</div></section>\n");
     }
     if !plots.is_empty() {
-        h.push_str("<section><h2>Curves: the face, the head, then the run</h2><div class=\"grid\">\n");
+        h.push_str(
+            "<section><h2>Curves: the face, the head, then the run</h2><div class=\"grid\">\n",
+        );
         for p in plots {
             let _ = writeln!(h, "<figure class=\"chart\">{}</figure>", p.svg);
         }
@@ -210,6 +216,47 @@ fn ranges(indices: &[u64]) -> String {
         })
         .collect();
     runs.join(", ")
+}
+
+/// What the take holds, for its user: its blinks, how far the head turns, the shapes that
+/// move most.
+fn take_rows(capture: &Capture) -> Vec<(String, String)> {
+    let Some(b) = &capture.blendshapes else {
+        return Vec::new();
+    };
+    let blinks: Vec<String> = moments(capture)
+        .iter()
+        .filter(|m| m.kind == MomentKind::Blink)
+        .map(|m| format!("{:.2} s", capture.frames[m.frame].time_s))
+        .collect();
+    let mut rows = vec![(
+        "blinks (both eyes closed)".to_string(),
+        match blinks.len() {
+            0 => "none".to_string(),
+            n => format!("{n}, at {}", blinks.join(", ")),
+        },
+    )];
+    let range = |axis: usize| {
+        let values = b.head.iter().flatten().map(|h| h[axis].to_degrees());
+        let (lo, hi) = values.fold((f32::MAX, f32::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        // Whole degrees as integers: no "-0°".
+        (lo <= hi).then(|| format!("{}° to {}°", lo.round() as i32, hi.round() as i32))
+    };
+    if let (Some(yaw), Some(pitch), Some(roll)) = (range(0), range(1), range(2)) {
+        rows.push((
+            "head turn (yaw, pitch, roll)".into(),
+            format!("{yaw}, {pitch}, {roll}"),
+        ));
+    }
+    let active: Vec<String> = shapes_by_motion(capture)
+        .into_iter()
+        .take(5)
+        .map(|(_, s)| s.name)
+        .collect();
+    if !active.is_empty() {
+        rows.push(("shapes that move most".into(), active.join(", ")));
+    }
+    rows
 }
 
 /// The summary table: what a user checks first.
