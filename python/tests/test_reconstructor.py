@@ -185,3 +185,21 @@ def test_two_reconstructors_on_two_threads_give_what_each_gives_alone():
         t.join()
     for k in range(2):
         assert np.array_equal(np.stack(got[k]), np.stack(expected))
+
+
+@needs_data
+def test_a_bgr_frame_is_warned_about_once_and_an_rgb_one_is_not():
+    import warnings
+
+    frame = frames(1)[0].image
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no warning for the RGB frames
+        rec = visage.Reconstructor()
+        rec.process(frame)
+        rec.process(frame)
+    rec = visage.Reconstructor()
+    with pytest.warns(UserWarning, match="BGR"):
+        rec.process(np.ascontiguousarray(frame[:, :, ::-1]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # once per reconstructor
+        rec.process(np.ascontiguousarray(frame[:, :, ::-1]))

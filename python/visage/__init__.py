@@ -135,6 +135,24 @@ def _check_frame(frame: Any) -> None:
         raise ValueError(f"a frame is an (H, W, 3) uint8 RGB array; this one's shape is {frame.shape}")
 
 
+def _bgr_looking(frame: np.ndarray, landmarks: np.ndarray) -> bool:
+    """Whether the face in ``frame`` (inside the box of its 468 landmarks) is bluer than it is
+    red: skin of every tone is redder than blue in daylight and indoor light, so a face that is
+    not is most likely a BGR frame (OpenCV's order) given as RGB. Not an error: a scene lit in
+    blue can do it too."""
+    points = landmarks[:468]
+    if not np.isfinite(points).all():
+        return False
+    h, w = frame.shape[:2]
+    x0, y0 = np.clip(np.floor(points.min(0)).astype(int), 0, [w - 1, h - 1])
+    x1, y1 = np.clip(np.ceil(points.max(0)).astype(int), 0, [w - 1, h - 1])
+    if x1 <= x0 or y1 <= y0:
+        return False
+    face = frame[y0 : y1 + 1 : 4, x0 : x1 + 1 : 4].reshape(-1, 3).astype(np.float64)
+    red, blue = face[:, 0].mean(), face[:, 2].mean()
+    return blue > 1.05 * red
+
+
 class Reconstructor:
     """Metric face meshes, blendshapes and head pose from frames, one at a time.
 
@@ -181,21 +199,44 @@ class Reconstructor:
                     f"intrinsics: a file, (fx, fy, cx, cy) or a (3, 3) camera matrix; this one's shape is {k.shape}"
                 )
         self._native = NativeReconstructor(fov_deg, focal, file, mode, latency, _models_dir(models))
+        self._colours_checked = False
+
+    def _check_colours(self, frame: np.ndarray, results: List[FrameResult]) -> None:
+        """Once, at the first frame with a face: a warning when it looks like BGR."""
+        if self._colours_checked:
+            return
+        for r in results:
+            if r.landmarks is None:
+                continue
+            self._colours_checked = True
+            if _bgr_looking(frame, r.landmarks):
+                warnings.warn(
+                    "the face in this frame is bluer than red: is it BGR (OpenCV's order)? "
+                    "visage takes RGB: cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)",
+                    stacklevel=3,
+                )
+            return
 
     def process(self, frame: np.ndarray, timestamp_s: Optional[float] = None) -> FrameResult:
         """Processes one frame and returns its result (``latency=0``, the default; else use
         :meth:`push`): an ``(H, W, 3)`` uint8 RGB array (OpenCV's frames are BGR:
-        ``cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)``). ``timestamp_s``: its time in seconds,
+        ``cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)``; a warning says so when the first face
+        found is bluer than red). ``timestamp_s``: its time in seconds,
         when known (else the frames are taken 1/30 s apart)."""
         _check_frame(frame)
-        return _result(self._native.process(frame, timestamp_s))
+        result = _result(self._native.process(frame, timestamp_s))
+        self._check_colours(frame, [result])
+        return result
 
     def push(self, frame: np.ndarray, timestamp_s: Optional[float] = None) -> List[FrameResult]:
         """Gives one frame (as :meth:`process`) and returns the frames it completed, in input
         order: with ``latency=1`` the frame before it (none after the first frame); at a cut
         or a lost face also the frames held back. With ``latency=0``, this frame."""
         _check_frame(frame)
-        return [_result(raw) for raw in self._native.push(frame, timestamp_s)]
+        results = [_result(raw) for raw in self._native.push(frame, timestamp_s)]
+        # The results may be of earlier frames (the latency): their face is still near.
+        self._check_colours(frame, results)
+        return results
 
     def end(self) -> List[FrameResult]:
         """The input has ended: the frames the smoother still held back, in input order."""
