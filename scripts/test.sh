@@ -14,10 +14,14 @@ VISAGE_TEST_DATA+=" ffmpeg=$(command -v ffmpeg >/dev/null && echo 1 || echo 0)"
 VISAGE_TEST_DATA+=" chromium=$([ -x /usr/bin/chromium ] && echo 1 || echo 0)"
 VISAGE_TEST_DATA+=" validator=$([ -d web/viewer/node_modules/gltf-validator ] && echo 1 || echo 0)"
 export VISAGE_TEST_DATA
+# Each step's end, in seconds since the start: where the suite's time goes.
+step() { echo "test: $1 done at ${SECONDS} s" >&2; }
 cargo fmt --all --check
 cargo clippy -q --workspace --all-targets -- -D warnings
+step clippy
 python3 scripts/import_cycles.py
 cargo test --workspace
+step "cargo test"
 # The Python package: its wheel built with the test build's profile (the dependencies `cargo
 # test` compiled), installed in target/py-venv, and its tests (pytest) against the command
 # line's debug binary.
@@ -25,6 +29,7 @@ py_venv="${CARGO_TARGET_DIR:-target}/py-venv"
 if [ -x "$py_venv/bin/maturin" ]; then
   bash scripts/build_python.sh dev
   VISAGE_BIN="${CARGO_TARGET_DIR:-target}/debug/visage" "$py_venv/bin/python" -m pytest -q python/tests
+  step "Python package"
 elif [ "${CI:-}" = true ]; then
   echo "test: no $py_venv/bin/maturin for the Python package (scripts/setup.sh)" >&2
   exit 1
@@ -35,7 +40,9 @@ fi
 # a single-node cluster started for the test (each says why when it skips).
 bash scripts/test_deploy.sh
 bash scripts/test_slurm.sh "${CARGO_TARGET_DIR:-target}/debug/visage"
+step "deploy and Slurm"
 RUSTDOCFLAGS="-D warnings" cargo doc -q --workspace --no-deps
+step docs
 # The fuzz targets: their bodies (crates/fuzz-targets) are replayed above, by `cargo test`, on
 # their seeds and 20,000 deterministic mutants each; their cargo-fuzz wrappers (fuzz/, a
 # workspace of its own that `cargo +nightly fuzz` runs; see fuzz/README.md) must keep
@@ -43,3 +50,4 @@ RUSTDOCFLAGS="-D warnings" cargo doc -q --workspace --no-deps
 # runtime (--no-default-features), in fuzz/target.
 cargo fmt --manifest-path fuzz/Cargo.toml --check
 cargo check -q --manifest-path fuzz/Cargo.toml --no-default-features
+step "fuzz wrappers"
