@@ -19,12 +19,12 @@ pub const FILE_GUIDE: [FileUse; 14] = [
     FileUse {
         file: GLB,
         holds: "the animated face: mesh, texture, head motion, the 52 ARKit shapes as morph targets with their keys",
-        goes_to: "Blender (File › Import › glTF: shape keys and head animated), three.js and the web (as in the report), Unreal and Godot (glTF import)",
+        goes_to: "Blender (File › Import › glTF: shape keys and head animated; checked), three.js and the web (as in the report), other glTF importers (Unreal, Godot; not checked here)",
     },
     FileUse {
         file: BLENDSHAPES_CSV,
         holds: "per frame, the 52 ARKit weights and the head's and eyes' angles, in Live Link Face's take format (names, order, timecode)",
-        goes_to: "a rig with ARKit-named shapes: Unreal and MetaHuman (as a Live Link Face take), Maya or MotionBuilder (keys from the columns), spreadsheets, pandas",
+        goes_to: "a rig with ARKit-named shapes (Unreal, Maya, MotionBuilder, Blender: keys from the columns, by name), spreadsheets, pandas",
     },
     FileUse {
         file: POINT_CACHE,
