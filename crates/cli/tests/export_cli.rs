@@ -281,7 +281,7 @@ fn streams(path: &Path) -> Vec<(String, f64)> {
     not(all(shared_data, model_files, ffmpeg)),
     ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
 )]
-fn the_preview_keeps_the_inputs_sound_in_step_with_the_frames() {
+fn the_preview_keeps_the_inputs_sound_in_step_with_the_frames_and_the_report_lists_it() {
     let models = visage_testdata::require(visage_testdata::models_dir());
     let video = visage_testdata::shared_dir().join("data/video");
     let tmp = tempfile::tempdir().unwrap();
@@ -299,9 +299,16 @@ fn the_preview_keeps_the_inputs_sound_in_step_with_the_frames() {
             "--max-frames",
             "15",
             "--preview",
+            "--report",
             "--models",
             s(&models),
         ]);
+        // The report's table of files lists the preview, written before it.
+        let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+        assert!(
+            report.contains("<a href=\"preview.mp4\">"),
+            "the report's table of files misses the preview"
+        );
         let streams = streams(&out.join("preview.mp4"));
         let duration = |kind: &str| streams.iter().find(|s| s.0 == kind).map(|s| s.1);
         let video = duration("video").expect("a video stream");

@@ -177,6 +177,12 @@ pub fn export(
         }
         None => Vec::new(),
     };
+    // The preview before the report, so that the report's table of files lists it.
+    if options.preview {
+        let t = Instant::now();
+        write_preview(&capture, &dir.join(file_names::PREVIEW))?;
+        summary.files.push(file_entry(dir, file_names::PREVIEW, t));
+    }
     if options.report {
         let t = Instant::now();
         let renders = frame_renders::frame_renders(&capture, texture_image.as_ref())?;
@@ -184,11 +190,6 @@ pub fn export(
         let html = report_html(&capture, &summary, &plots, &renders, viewer);
         write_file(&dir.join(file_names::REPORT), html.as_bytes())?;
         summary.files.push(file_entry(dir, file_names::REPORT, t));
-    }
-    if options.preview {
-        let t = Instant::now();
-        write_preview(&capture, &dir.join(file_names::PREVIEW))?;
-        summary.files.push(file_entry(dir, file_names::PREVIEW, t));
     }
     summary.total_ms = start.elapsed().as_secs_f64() * 1e3;
     let text =
