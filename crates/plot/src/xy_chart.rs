@@ -74,8 +74,8 @@ pub fn xy_chart_svg(title: &str, x_label: &str, y_label: &str, series: &[XySerie
 }
 
 /// The chart of [`xy_chart_svg`] as a PNG (plotters' bitmap backend): the same layout drawn
-/// [`PNG_SCALE`] times larger, 1280 × 800 pixels and the legend's column, the text in the
-/// built-in DejaVu Sans so that it reads the same on a machine without fonts.
+/// twice as large, 1280 × 800 pixels and the legend's column, the text in the built-in DejaVu
+/// Sans so that it reads the same on a machine without fonts.
 ///
 /// # Errors
 /// What the PNG encoder returns (writing into memory, it has no reason to fail).
