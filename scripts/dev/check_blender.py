@@ -1,5 +1,7 @@
 # Dev-only: checks that Blender reads a `visage run --ply --glb` output folder as intended.
 # Usage: blender -b --factory-startup --python scripts/dev/check_blender.py -- OUT_DIR
+#    or, with Blender as a Python module (`pip install bpy==4.5.*` on Python 3.11):
+#        python scripts/dev/check_blender.py -- OUT_DIR
 # OBJ import + vertex order, Mesh Cache (PC2) playback and sequence.glb against OUT_DIR/meshes/*.ply.
 import json
 import math
@@ -138,18 +140,33 @@ if cam:
     print(f"[glb] camera at {rnd(cam.matrix_world.translation)} looks along {rnd(rot @ Vector((0, 0, -1)))}, "
           f"up {rnd(rot @ Vector((0, 1, 0)))} (camera z, -y in Blender: (0, 1, 0), (0, 0, 1))")
 print(f"[glb] {len(keys)} shape keys (incl. basis): {names[:6]}{' ...' if len(names) > 6 else ''}")
-obj_act = face.animation_data.action if face.animation_data else None
-sk = face.data.shape_keys
-key_act = sk.animation_data.action if sk and sk.animation_data else None
-for label, act in (("object", obj_act), ("shape keys", key_act)):
-    paths = sorted({fc.data_path for fc in act.fcurves}) if act else []
-    k = [kp.co[0] for kp in act.fcurves[0].keyframe_points] if act else []
-    print(f"[glb] {label} action: {act.name if act else None}, paths {paths[:4]}, "
-          f"range {tuple(act.frame_range) if act else None}, first keys at frames {[round(x, 3) for x in k[:4]]}")
+
+
+def animation(owner):
+    """The action animating `owner` and its F-curves: since Blender 4.4 one action holds a slot
+    per animated owner (the glTF importer puts the object and its shape keys in one), each
+    with its own curves."""
+    ad = owner.animation_data if owner else None
+    act = ad.action if ad else None
+    if act is None:
+        return None, []
+    if getattr(ad, "action_slot", None) is not None:
+        from bpy_extras import anim_utils
+        bag = anim_utils.action_get_channelbag_for_slot(act, ad.action_slot)
+        return act, list(bag.fcurves) if bag else []
+    return act, list(act.fcurves)
+
+
+obj_act, obj_curves = animation(face)
+key_act, key_curves = animation(face.data.shape_keys)
+for label, act, curves in (("object", obj_act, obj_curves), ("shape keys", key_act, key_curves)):
+    paths = sorted({fc.data_path for fc in curves})
+    k = [kp.co[0] for kp in curves[0].keyframe_points] if curves else []
+    print(f"[glb] {label} action: {act.name if act else None}, {len(curves)} curves, paths {paths[:4]}, "
+          f"keys at frames {[round(x, 3) for x in k[:3]]} .. {round(k[-1], 3) if k else None}")
 print(f"[glb] scene after import: fps {scene.render.fps}/{scene.render.fps_base}, "
       f"frames {scene.frame_start}..{scene.frame_end} (importer places time t at frame t * render.fps)")
-weights = {fc.data_path.split('"')[1]: [kp.co[1] for kp in fc.keyframe_points]
-           for fc in (key_act.fcurves if key_act else [])}
+weights = {fc.data_path.split('"')[1]: [kp.co[1] for kp in fc.keyframe_points] for fc in key_curves}
 for kb in list(keys)[1:4]:
     w = weights.get(kb.name, [0])
     print(f"[glb] {kb.name}: slider {kb.slider_min:.3f}..{kb.slider_max:.3f}, animated {min(w):.3f}..{max(w):.3f}")

@@ -1,7 +1,7 @@
 //! The files people open: the point cache holds the PLYs' surfaces in mesh.obj's axes, the glb
 //! plays them back (morph targets and head motion) within a fraction of a millimetre and passes
-//! the Khronos validator, `visage export` remakes them from the folder, and a folder that is
-//! not a run's is a clear error.
+//! the Khronos validator, the charts are there as SVG and PNG, `visage export` remakes them from
+//! the folder, and a folder that is not a run's is a clear error.
 
 mod common;
 
@@ -110,6 +110,32 @@ fn the_point_cache_and_the_glb_play_the_fused_surfaces() {
     assert!(mtl.contains("map_Kd texture.png"), "{mtl}");
     let texture = image::open(out.join("texture.png")).unwrap().to_rgb8();
     assert!(texture.width() >= 256 && texture.width() == texture.height());
+
+    // The charts (`--report` makes them), each as SVG and as PNG: 1280 × 800 pixels and the
+    // legend's column.
+    let files: Vec<String> = std::fs::read_dir(out.join("plots"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    let charts: Vec<&str> = files
+        .iter()
+        .filter_map(|f| f.strip_suffix(".svg"))
+        .collect();
+    assert!(
+        charts.contains(&"blendshapes") && charts.len() >= 6,
+        "{files:?}"
+    );
+    assert_eq!(files.len(), 2 * charts.len(), "{files:?}");
+    for chart in charts {
+        let png = image::open(out.join(format!("plots/{chart}.png")))
+            .unwrap()
+            .to_rgb8();
+        assert!(
+            png.height() == 800 && png.width() > 1280,
+            "{chart}: {:?}",
+            png.dimensions()
+        );
+    }
 
     // The glb: base + Σ wᵢ targetᵢ, then the node's rotation and translation, is each frame's
     // surface in glTF's axes (x, −y, −z).

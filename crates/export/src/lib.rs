@@ -1,8 +1,8 @@
 //! What people open after a run, made from its output folder ([`Capture`]): the animated glTF
 //! (`sequence.glb`), the face texture fused from the frames (`texture.png`, also named by
-//! `mesh.mtl`), the per-frame charts (`plots/*.svg`), the offline report with its 3-D viewer
-//! (`report.html`), the preview video (`preview.mp4`), and the list of what was written with
-//! sizes and times (`export.json`).
+//! `mesh.mtl`), the per-frame charts (`plots/*.svg` and `*.png`), the offline report with its
+//! 3-D viewer (`report.html`), the preview video (`preview.mp4`), and the list of what was
+//! written with sizes and times (`export.json`).
 //!
 //! `visage run --glb --report --preview` calls [`export`] on the folder it has just written;
 //! `visage export OUT` does the same for any earlier run's folder.
@@ -56,7 +56,7 @@ pub struct ExportOptions {
     pub glb: bool,
     /// `texture.png` (and `mesh.mtl` naming it); the glb uses it.
     pub texture: bool,
-    /// `plots/*.svg`.
+    /// `plots/*.svg` and `plots/*.png`.
     pub plots: bool,
     /// `report.html` (with the glb, the texture and the plots).
     pub report: bool,
@@ -248,7 +248,7 @@ fn make_glb(
     Ok((bytes, animation, file_entry(dir, file_names::GLB, t)))
 }
 
-/// The per-frame charts, written to `plots/`.
+/// The per-frame charts, written to `plots/` as SVG and PNG.
 fn make_plots(capture: &Capture, dir: &Path) -> Result<(Vec<Plot>, ExportedFile), ExportError> {
     let t = Instant::now();
     let landmarks_path = dir.join(file_names::LANDMARKS);
@@ -262,12 +262,16 @@ fn make_plots(capture: &Capture, dir: &Path) -> Result<(Vec<Plot>, ExportedFile)
         path: plot_dir.clone(),
         source,
     })?;
+    let mut bytes = 0;
     for p in &plots {
-        write_file(&plot_dir.join(p.file), p.svg.as_bytes())?;
+        let png = p.png()?;
+        write_file(&plot_dir.join(format!("{}.svg", p.name)), p.svg.as_bytes())?;
+        write_file(&plot_dir.join(format!("{}.png", p.name)), &png)?;
+        bytes += (p.svg.len() + png.len()) as u64;
     }
     let file = ExportedFile {
         file: format!("{}/", file_names::PLOTS_FOLDER),
-        bytes: plots.iter().map(|p| p.svg.len() as u64).sum(),
+        bytes,
         ms: t.elapsed().as_secs_f64() * 1e3,
     };
     Ok((plots, file))

@@ -9,9 +9,9 @@
 use std::collections::HashMap;
 
 use serde_json::Value;
-use visage_plot::{xy_chart_svg, XySeries};
+use visage_plot::{xy_chart_png, xy_chart_svg, XySeries};
 
-use crate::Capture;
+use crate::{Capture, ExportError};
 
 /// The stages `metrics.json` times, in pipeline order.
 const STAGES: [&str; 6] = ["decode", "track", "fit", "depth", "fuse", "write"];
@@ -22,12 +22,26 @@ const FPS_WINDOW_S: f64 = 1.0;
 const BLENDSHAPE_CURVES: usize = 8;
 const TIME: &str = "time (s)";
 
-/// One chart of the run report.
+/// One chart of the run report, written as `plots/NAME.svg` and `plots/NAME.png`.
 pub struct Plot {
-    /// File name in the report, e.g. `stage_times.svg`.
-    pub file: &'static str,
+    /// The files' name without its extension, e.g. `stage_times`.
+    pub name: &'static str,
     pub title: String,
+    /// The chart as SVG, which scales to its container (the report embeds it).
     pub svg: String,
+    y_label: &'static str,
+    series: Vec<XySeries>,
+}
+
+impl Plot {
+    /// The chart as a PNG: the SVG's drawing at 1280 × 800 pixels and the legend's column.
+    ///
+    /// # Errors
+    /// [`ExportError::Internal`] if the PNG encoder fails (it writes into memory).
+    pub fn png(&self) -> Result<Vec<u8>, ExportError> {
+        xy_chart_png(&self.title, TIME, self.y_label, &self.series)
+            .map_err(|e| ExportError::Internal(format!("PNG encoding: {e}")))
+    }
 }
 
 /// The run's charts (the design paper's per-frame figures for this run), x = time in seconds.
@@ -70,12 +84,23 @@ fn time_of(frame: &Value, times: &HashMap<u64, f64>) -> Option<f64> {
 }
 
 /// The chart, unless no curve has a point.
-fn chart(file: &'static str, title: String, y_label: &str, series: Vec<XySeries>) -> Option<Plot> {
+fn chart(
+    name: &'static str,
+    title: String,
+    y_label: &'static str,
+    series: Vec<XySeries>,
+) -> Option<Plot> {
     if series.iter().all(|s| s.points.is_empty()) {
         return None;
     }
     let svg = xy_chart_svg(&title, TIME, y_label, &series);
-    Some(Plot { file, title, svg })
+    Some(Plot {
+        name,
+        title,
+        svg,
+        y_label,
+        series,
+    })
 }
 
 fn curve(name: impl Into<String>, points: Vec<(f64, f64)>) -> XySeries {
@@ -119,7 +144,7 @@ fn stage_times(frames: &[(f64, &Value)]) -> Option<Plot> {
         .collect();
     series.push(curve("total", per_frame(frames, total_ms)));
     chart(
-        "stage_times.svg",
+        "stage_times",
         "Time per frame by stage".into(),
         "ms",
         series,
@@ -143,7 +168,7 @@ fn fps(frames: &[(f64, &Value)], summary: &Value) -> Option<Plot> {
         Some(c) => format!("Frames per second (CPU use {c:.2} cores on average)"),
         None => "Frames per second".into(),
     };
-    chart("fps.svg", title, "frames / s", series)
+    chart("fps", title, "frames / s", series)
 }
 
 /// The frame rate around each frame: frames in the centred window over their time in it, ms.
@@ -178,7 +203,7 @@ fn curvature(frames: &[(f64, &Value)]) -> Option<Plot> {
     let mut series = vec![curve("raw / fused", gain.clone())];
     series.extend(level("1 = no change".into(), 1.0, &gain));
     let title = "Mean-curvature improvement (mean |H| raw / fused)".into();
-    chart("curvature.svg", title, "ratio", series)
+    chart("curvature", title, "ratio", series)
 }
 
 fn roughness(frames: &[(f64, &Value)]) -> Option<Plot> {
@@ -187,7 +212,7 @@ fn roughness(frames: &[(f64, &Value)]) -> Option<Plot> {
         curve("fused", per_frame(frames, |f| f["roughness"].as_f64())),
     ];
     chart(
-        "roughness.svg",
+        "roughness",
         "Roughness, raw vs fused".into(),
         "roughness",
         series,
@@ -221,7 +246,7 @@ fn jitter(landmarks: &Value, times: &HashMap<u64, f64>) -> Option<Plot> {
     }
     let series = vec![curve("tracked", tracked), curve("fused", fused)];
     let title = "Landmark jitter (RMS second difference)".into();
-    chart("jitter.svg", title, "px", series)
+    chart("jitter", title, "px", series)
 }
 
 /// A frame's time and its tracked and fused landmark pixels.
@@ -286,7 +311,7 @@ fn blendshapes(capture: &Capture) -> Option<Plot> {
         .map(|c| c.1)
         .collect();
     let title = format!("ARKit blendshapes: the {BLENDSHAPE_CURVES} that move most");
-    chart("blendshapes.svg", title, "weight", series)
+    chart("blendshapes", title, "weight", series)
 }
 
 /// The head's yaw, pitch and roll over the take, in degrees.
@@ -302,7 +327,7 @@ fn head_motion(capture: &Capture) -> Option<Plot> {
             curve(*name, points)
         })
         .collect();
-    chart("head.svg", "Head motion".into(), "degrees", series)
+    chart("head", "Head motion".into(), "degrees", series)
 }
 
 #[cfg(test)]
@@ -357,17 +382,17 @@ mod tests {
             }),
         );
         let plots = run_plots(&c, Some(&landmarks));
-        let files: Vec<&str> = plots.iter().map(|p| p.file).collect();
+        let names: Vec<&str> = plots.iter().map(|p| p.name).collect();
         assert_eq!(
-            files,
+            names,
             [
-                "blendshapes.svg",
-                "head.svg",
-                "stage_times.svg",
-                "fps.svg",
-                "curvature.svg",
-                "roughness.svg",
-                "jitter.svg",
+                "blendshapes",
+                "head",
+                "stage_times",
+                "fps",
+                "curvature",
+                "roughness",
+                "jitter",
             ]
         );
         assert!(plots.iter().all(|p| p.svg.starts_with("<svg")));
@@ -410,7 +435,7 @@ mod tests {
         let c = capture(3, metrics, Some(shapes));
         let plots = run_plots(&c, Some(&landmarks));
         assert!(plots.iter().all(|p| p.svg.starts_with("<svg")));
-        assert!(plots.iter().all(|p| p.file != "jitter.svg"));
+        assert!(plots.iter().all(|p| p.name != "jitter"));
         assert!(run_plots(&capture(0, Value::Null, None), Some(&Value::Null)).is_empty());
     }
 }

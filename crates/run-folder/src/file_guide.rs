@@ -83,7 +83,7 @@ pub const FILE_GUIDE: [FileUse; 14] = [
     },
     FileUse {
         file: PLOTS_FOLDER,
-        holds: "the report's charts as SVG",
+        holds: "the report's charts as SVG and PNG",
         goes_to: "documents and slides",
     },
 ];

@@ -16,8 +16,8 @@ pub struct ExportArgs {
     /// Write OUT/texture.png: the face's colour fused from the frames (mesh.mtl names it).
     #[arg(long)]
     pub texture: bool,
-    /// Write OUT/plots/*.svg: per-frame time by stage, frame rate, curvature, roughness,
-    /// jitter and the blendshape curves.
+    /// Write OUT/plots/*.svg and *.png: per-frame time by stage, frame rate, curvature,
+    /// roughness, jitter and the blendshape curves.
     #[arg(long)]
     pub plots: bool,
     /// Write OUT/report.html: one page that opens offline — summary, renders, the plots and
