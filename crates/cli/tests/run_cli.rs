@@ -157,7 +157,7 @@ fn image_mesh_and_clip_mode_run() {
     not(all(shared_data, model_files, ffmpeg)),
     ignore = "needs ../shared, the model files (scripts/setup.sh) and FFmpeg"
 )]
-fn bench_prints_stage_percentiles() {
+fn bench_prints_stage_percentiles_and_the_kernels_it_ran() {
     let (models, clip) = inputs();
     let o = visage(&[
         "bench",
@@ -174,6 +174,21 @@ fn bench_prints_stage_percentiles() {
     assert_eq!(j["writes_meshes"], false);
     assert!(j["stages_ms"]["fuse"]["median_ms"].as_f64().unwrap() > 0.0);
     assert!(j["peak_rss_mib"].as_f64().unwrap() > 1.0);
+    let kernels = j["network_kernels"].as_str().unwrap();
+    assert!(
+        ["avx512", "avx2+fma", "portable"].contains(&kernels),
+        "{kernels}"
+    );
+    // The AVX-512 kernels switched off, as on a machine with AVX2 only.
+    let o = Command::new(env!("CARGO_BIN_EXE_visage"))
+        .args(["bench", s(&clip), "--max-frames", "2", "--quiet"])
+        .args(["--models", s(&models)])
+        .env("VISAGE_NO_AVX512", "1")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_ne!(j["network_kernels"], "avx512");
 }
 
 #[test]

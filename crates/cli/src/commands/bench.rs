@@ -53,6 +53,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         "cpu_use": s.cpu_use,
         "cpu_ms_per_frame": s.cpu_ms_per_frame,
         "threads": std::thread::available_parallelism().map(|n| n.get()).ok(),
+        "network_kernels": visage_nn::ops::kernels(),
         "peak_rss_mib": s.peak_rss_mib,
         "detector_runs": s.detector_runs,
         "stages_ms": s.stages,

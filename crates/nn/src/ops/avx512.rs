@@ -19,13 +19,22 @@ use std::arch::x86_64::{
     _mm512_maskz_loadu_ps, _mm512_max_ps, _mm512_set1_ps, _mm512_setzero_ps,
 };
 
-/// Whether this CPU runs the kernels of this module.
+/// The environment variable that switches this module's kernels off (any value), so that a
+/// machine with AVX-512 can measure what one with AVX2 only would run.
+const NO_AVX512_VARIABLE: &str = "VISAGE_NO_AVX512";
+
+/// Whether this CPU runs the kernels of this module: it has AVX-512F and
+/// [`NO_AVX512_VARIABLE`] is not set (read once per process).
 pub(super) fn available() -> bool {
     #[cfg(test)]
     if AVX2_ONLY.with(std::cell::Cell::get) {
         return false;
     }
-    std::arch::is_x86_feature_detected!("avx512f")
+    static AVAILABLE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *AVAILABLE.get_or_init(|| {
+        std::arch::is_x86_feature_detected!("avx512f")
+            && std::env::var_os(NO_AVX512_VARIABLE).is_none()
+    })
 }
 
 #[cfg(test)]

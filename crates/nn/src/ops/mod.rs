@@ -29,6 +29,23 @@ pub use pad::pad4;
 pub use resize_bilinear::{resize_bilinear, ResizeAxis};
 pub use window::Window;
 
+/// The convolution kernels this process runs: `"avx512"`, `"avx2+fma"` or `"portable"` (what
+/// a benchmark reports beside its figures; set `VISAGE_NO_AVX512` to measure the AVX2 ones on
+/// a CPU that has AVX-512).
+pub fn kernels() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if avx512::available() {
+            return "avx512";
+        }
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            return "avx2+fma";
+        }
+    }
+    "portable"
+}
+
 /// `n` deterministic test values in [−0.5, 0.5) from `seed` (a linear congruential generator).
 #[cfg(test)]
 pub(crate) fn test_values(n: usize, seed: u32) -> Vec<f32> {
