@@ -1,13 +1,16 @@
-"""visage.run against `visage run`: the same files, the same errors; its progress, the GIL
-released while it works, and a run stopped from Python."""
+"""visage.run against `visage run`: the same files (the exports, every face, an RGB-D recording
+included), the same errors; its progress, the GIL released while it works, and a run stopped
+from Python."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import threading
 
+import numpy as np
 import pytest
-from conftest import CLIP, MODELS, needs_data, visage_cli
+from conftest import CI, CLIP, MODELS, frames, needs_data, visage_cli
 
 import visage
 
@@ -38,6 +41,66 @@ def test_run_writes_the_command_lines_files(tmp_path):
     assert (result.frames, result.meshed, result.kept) == (n, n, n)
     assert result.summary["frames"] == n
     assert calls == [(k, n) for k in range(1, n + 1)]
+
+
+@needs_data
+def test_run_makes_the_command_lines_exports(tmp_path):
+    """glb=True, report=True write what --glb --report write (the glb, the texture, the plots,
+    the report and export.json), from the frames the run kept."""
+    n = 8
+    cli, py = tmp_path / "cli", tmp_path / "py"
+    visage_cli("run", str(CLIP), "--out", str(cli), "--max-frames", str(n), "--models", str(MODELS),
+               "--glb", "--report", "--quiet")
+    result = visage.run(CLIP, py, max_frames=n, models=MODELS, glb=True, report=True)
+    assert files(py) == files(cli)
+    for name in ("sequence.glb", "texture.png", "report.html", "export.json"):
+        assert (py / name).is_file(), name
+    exported = json.loads((cli / "export.json").read_text())
+    assert result.exports is not None
+    assert [f["file"] for f in result.exports["files"]] == [f["file"] for f in exported["files"]]
+    assert result.exports["named_targets"] == exported["named_targets"]
+    # The texture is fused from the same kept frames.
+    assert (py / "texture.png").read_bytes() == (cli / "texture.png").read_bytes()
+
+
+@needs_data
+def test_run_over_every_face_writes_the_command_lines_folders(tmp_path):
+    n = 4
+    cli, py = tmp_path / "cli", tmp_path / "py"
+    visage_cli("run", str(CLIP), "--out", str(cli), "--max-frames", str(n), "--models", str(MODELS),
+               "--faces", "all", "--quiet")
+    result = visage.run(CLIP, py, max_frames=n, models=MODELS, faces="all")
+    assert files(py) == files(cli)
+    f_py, f_cli = (json.loads((d / "faces.json").read_text()) for d in (py, cli))
+    assert f_py == f_cli
+    assert [r.out_dir for r in result.faces] == [py / f["folder"] for f in f_cli["faces"]]
+    assert result.meshed == sum(f["frames_meshed"] for f in f_cli["faces"])
+
+
+@needs_data
+@pytest.mark.skipif(importlib.util.find_spec("cv2") is None and not CI, reason="needs cv2 (scripts/setup.sh)")
+def test_run_reads_an_rgbd_recording_as_the_command_line(tmp_path):
+    """rgbd= is --rgbd: a recording of rgb/ and depth/ (the sample clip's frames, a flat 16-bit
+    depth map in millimetres each) fused frame by frame, the same files and parameters."""
+    import cv2  # opencv-python-headless, pinned beside the package (scripts/setup.sh)
+
+    recording = tmp_path / "recording"
+    (recording / "rgb").mkdir(parents=True)
+    (recording / "depth").mkdir()
+    for frame in frames(4):
+        name = f"frame{frame.index:03d}.png"
+        cv2.imwrite(str(recording / "rgb" / name), cv2.cvtColor(frame.image, cv2.COLOR_RGB2BGR))
+        cv2.imwrite(str(recording / "depth" / name), np.full(frame.image.shape[:2], 600, dtype=np.uint16))
+    cli, py = tmp_path / "cli", tmp_path / "py"
+    visage_cli("run", "--rgbd", str(recording), "--out", str(cli), "--models", str(MODELS), "--quiet")
+    result = visage.run(None, py, rgbd=recording, models=MODELS)
+    assert files(py) == files(cli)
+    m_py, m_cli = (json.loads((d / "metrics.json").read_text()) for d in (py, cli))
+    for key in ("parameters", "intrinsics", "input"):
+        assert m_py[key] == m_cli[key], key
+    assert m_py["parameters"]["depth"] == m_cli["parameters"]["depth"] != "face"
+    assert result.frames == 4
+    assert (py / "sequence.pc2").read_bytes() == (cli / "sequence.pc2").read_bytes()
 
 
 @needs_data
@@ -110,8 +173,17 @@ def test_run_refuses_what_the_command_line_refuses(tmp_path):
         visage.run(CLIP, tmp_path / "c", smoothing="fast")
     with pytest.raises(ValueError, match="overwrite and resume cannot be given together"):
         visage.run(CLIP, tmp_path / "c", overwrite=True, resume=True)
-    with pytest.raises(TypeError, match="glb"):
-        visage.run(CLIP, tmp_path / "c", glb=True)
+    with pytest.raises(ValueError, match='faces="every": must be one of "largest", "all"'):
+        visage.run(CLIP, tmp_path / "c", faces="every")
+    with pytest.raises(ValueError, match="input and rgbd cannot be given together"):
+        visage.run(CLIP, tmp_path / "c", rgbd=tmp_path)
+    with pytest.raises(ValueError, match="keep_depth_edges needs rgbd"):
+        visage.run(CLIP, tmp_path / "c", keep_depth_edges=True)
+    with pytest.raises(ValueError, match="input or rgbd must be given"):
+        visage.run(None, tmp_path / "c")
+    # An option the command line does not have.
+    with pytest.raises(TypeError, match="gltf"):
+        visage.run(CLIP, tmp_path / "c", gltf=True)
 
 
 @needs_data

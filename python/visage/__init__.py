@@ -12,7 +12,8 @@ The Rust library visage as a Python package::
 - :class:`Reconstructor` processes ``(H, W, 3)`` uint8 RGB frames one at a time (causally: each
   frame's result as soon as it is given; with ``latency`` frames of look-ahead through
   :meth:`Reconstructor.push`), with the GIL released while it works.
-- :func:`run` is ``visage run`` as a call: a clip into an output folder, the same files.
+- :func:`run` is ``visage run`` as a call: a clip into an output folder, the same files (its
+  exports included: ``glb=True``, ``report=True``, …).
 - :func:`open` reads a video, an image folder or an image as visage does.
 - :func:`read_run` loads a run folder written by ``visage run`` (or :func:`run`) into numpy.
 
@@ -293,6 +294,14 @@ class RunResult:
     #: The run's summary as ``metrics.json`` has it (frames per second, peak memory, the
     #: quality figures, per-stage times); ``None`` when ``resume=True`` found the run complete.
     summary: Optional[Dict[str, Any]] = field(repr=False)
+    #: What the exports wrote, as ``export.json`` has it (``files`` with their sizes and
+    #: times, the glb's morph targets and error, the texture's frames); ``None`` without
+    #: exports.
+    exports: Optional[Dict[str, Any]] = field(default=None, repr=False)
+    #: With ``faces="all"``: each face's run, into its folder ``out_dir / "face-N"``, left to
+    #: right (the fields above are then their sums, ``summary`` and ``exports`` ``None``);
+    #: else empty.
+    faces: Tuple["RunResult", ...] = ()
 
 
 _log = logging.getLogger("visage")
@@ -308,15 +317,19 @@ def _notify(kind: str, message: str) -> None:
 
 
 def run(
-    input: PathLike,  # noqa: A002 - the command line's INPUT
+    input: Optional[PathLike],  # noqa: A002 - the command line's INPUT
     out_dir: PathLike,
     *,
     progress: Optional[Callable[[int, Optional[int]], Any]] = None,
+    rgbd: Optional[PathLike] = None,
+    depth_scale: Optional[float] = None,
+    depth_intrinsics: Optional[PathLike] = None,
+    depth_to_color: Optional[PathLike] = None,
+    keep_depth_edges: bool = False,
+    depth_config: Optional[PathLike] = None,
     intrinsics: Optional[PathLike] = None,
     fov_deg: Optional[float] = None,
     depth: Optional[str] = None,
-    depth_config: Optional[PathLike] = None,
-    depth_scale: Optional[float] = None,
     lambda_: Optional[float] = None,
     mu: Optional[float] = None,
     smoothing: Optional[Union[float, str]] = None,
@@ -337,36 +350,56 @@ def run(
     ascii: bool = False,  # noqa: A002 - the command line's --ascii
     overwrite: bool = False,
     resume: bool = False,
+    faces: Optional[str] = None,
+    glb: bool = False,
+    texture: bool = False,
+    plots: bool = False,
+    report: bool = False,
+    preview: bool = False,
 ) -> RunResult:
     """``visage run INPUT --out OUT_DIR [options]`` as a call: the same files in ``out_dir``
     (``sequence.pc2`` with ``mesh.obj``, ``landmarks.json``, ``blendshapes.csv``,
-    ``camera.json``, ``metrics.json``; PLYs with ``ply``/``save_raw``), the same errors
-    (:class:`VisageError`, with the command line's message).
+    ``camera.json``, ``metrics.json``; PLYs with ``ply``/``save_raw``; ``sequence.glb``,
+    ``texture.png``, ``plots/``, ``report.html``, ``preview.mp4`` and ``export.json`` with
+    ``glb``, ``texture``, ``plots``, ``report``, ``preview``), the same errors
+    (:class:`VisageError`, with the command line's message). The options fill the same
+    settings as the flags, and the run is the command line's own code.
 
     The options are the flags' (``visage run --help`` says what each does), snake_case:
     ``fov_deg`` is ``--fov-deg``, ``lambda_`` is ``--lambda``, ``smoothing`` a number or
-    ``"off"``; ``None`` is the flag's default. Not here: ``--rgbd`` and its flags,
-    ``--faces all``, ``--quiet`` (nothing is printed) and the exports (``--glb``,
-    ``--texture``, ``--plots``, ``--report``, ``--preview``: ``visage export OUT_DIR`` makes
-    them from the folder).
+    ``"off"``, ``faces`` ``"largest"`` or ``"all"``; ``None`` is the flag's default. An
+    RGB-D recording is ``run(None, out_dir, rgbd=folder)``. Not here: ``--quiet`` (nothing is
+    printed). With ``faces="all"`` each face of the first frame that shows one goes into its
+    own ``out_dir / "face-N"``, with ``faces.json`` listing them (:attr:`RunResult.faces`).
 
     ``progress(frames_done, frames_total)`` is called after every frame (``frames_total`` is
-    ``None`` when the input does not say), with the GIL held only for the call; if it raises,
-    the run stops as after Ctrl-C — the frames so far are written and ``metrics.json`` says
-    ``"interrupted"`` — and its exception is raised. Ctrl-C does the same
-    (:class:`KeyboardInterrupt`). Warnings go to :mod:`warnings`, notices (what ``overwrite``
-    removed, what a resume kept) to the ``visage`` logger.
+    ``None`` when the input does not say; with ``faces="all"`` it starts again for each face),
+    with the GIL held only for the call; if it raises, the run stops as after Ctrl-C — the
+    frames so far are written and ``metrics.json`` says ``"interrupted"`` — and its exception
+    is raised. Ctrl-C does the same (:class:`KeyboardInterrupt`). Warnings go to
+    :mod:`warnings`, notices (the camera assumed, what ``overwrite`` removed, what a resume
+    kept) to the ``visage`` logger. Options that conflict, or one without another it needs,
+    raise :class:`ValueError`, as the command line refuses them; an unknown option raises
+    :class:`TypeError`.
     """
+
+    def path(p: Optional[PathLike]) -> Optional[str]:
+        return None if p is None else os.fspath(p)
+
     raw = _native_run(
-        os.fspath(input),
+        path(input),
         os.fspath(out_dir),
         _notify,
         progress,
-        intrinsics=None if intrinsics is None else os.fspath(intrinsics),
+        rgbd=path(rgbd),
+        depth_scale=depth_scale,
+        depth_intrinsics=path(depth_intrinsics),
+        depth_to_color=path(depth_to_color),
+        keep_depth_edges=keep_depth_edges,
+        depth_config=path(depth_config),
+        intrinsics=path(intrinsics),
         fov_deg=fov_deg,
         depth=depth,
-        depth_config=None if depth_config is None else os.fspath(depth_config),
-        depth_scale=depth_scale,
         lambda_=lambda_,
         mu=mu,
         smoothing=None if smoothing is None else str(smoothing),
@@ -380,21 +413,40 @@ def run(
         every=every,
         max_frames=max_frames,
         models=_models_dir(models),
-        model=None if model is None else os.fspath(model),
+        model=path(model),
         no_fit=no_fit,
         ply=ply,
         save_raw=save_raw,
         ascii=ascii,
         overwrite=overwrite,
         resume=resume,
+        faces=faces,
+        glb=glb,
+        texture=texture,
+        plots=plots,
+        report=report,
+        preview=preview,
     )
-    summary = raw["summary_json"]
+    runs = [
+        RunResult(
+            out_dir=Path(face["dir"]),
+            frames=face["frames"],
+            meshed=face["meshed"],
+            kept=face["kept"],
+            summary=None if face["summary_json"] is None else json.loads(face["summary_json"]),
+            exports=None if face["exports_json"] is None else json.loads(face["exports_json"]),
+        )
+        for face in raw
+    ]
+    if faces != "all":
+        return runs[0]
     return RunResult(
         out_dir=Path(out_dir),
-        frames=raw["frames"],
-        meshed=raw["meshed"],
-        kept=raw["kept"],
-        summary=None if summary is None else json.loads(summary),
+        frames=sum(r.frames for r in runs),
+        meshed=sum(r.meshed for r in runs),
+        kept=sum(r.kept for r in runs),
+        summary=None,
+        faces=tuple(runs),
     )
 
 

@@ -38,16 +38,20 @@ class NativeFrames:
     def __next__(self) -> Tuple[int, Optional[float], np.ndarray]: ...
 
 def run(
-    input: str,
+    input: Optional[str],
     out_dir: str,
     notify: Callable[[str, str], Any],
     progress: Optional[Callable[[int, Optional[int]], Any]] = ...,
     *,
+    rgbd: Optional[str] = ...,
+    depth_scale: Optional[float] = ...,
+    depth_intrinsics: Optional[str] = ...,
+    depth_to_color: Optional[str] = ...,
+    keep_depth_edges: bool = ...,
+    depth_config: Optional[str] = ...,
     intrinsics: Optional[str] = ...,
     fov_deg: Optional[float] = ...,
     depth: Optional[str] = ...,
-    depth_config: Optional[str] = ...,
-    depth_scale: Optional[float] = ...,
     lambda_: Optional[float] = ...,
     mu: Optional[float] = ...,
     smoothing: Optional[str] = ...,
@@ -68,4 +72,10 @@ def run(
     ascii: bool = ...,
     overwrite: bool = ...,
     resume: bool = ...,
-) -> Dict[str, Any]: ...
+    faces: Optional[str] = ...,
+    glb: bool = ...,
+    texture: bool = ...,
+    plots: bool = ...,
+    report: bool = ...,
+    preview: bool = ...,
+) -> List[Dict[str, Any]]: ...

@@ -64,6 +64,13 @@ pub struct ExportOptions {
     pub preview: bool,
 }
 
+impl ExportOptions {
+    /// Whether any export is asked for.
+    pub fn any(&self) -> bool {
+        self.glb || self.texture || self.plots || self.report || self.preview
+    }
+}
+
 /// One file written.
 #[derive(Clone, Debug, Serialize)]
 pub struct ExportedFile {

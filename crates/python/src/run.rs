@@ -1,60 +1,26 @@
-//! `visage.run`: a clip run into a folder as `visage run INPUT --out OUT` does it — the same
-//! options (named like the flags, snake_case), the same files, the same error messages — with
-//! the frames done reported to a Python callable. The GIL is released while the run works and
-//! taken only to call back.
-//!
-//! Not here: `--rgbd` and its flags, `--faces all`, and the exports (`--glb`, `--texture`,
-//! `--plots`, `--report`, `--preview`), which `visage export OUT` makes from the folder.
+//! `visage.run`: `visage run INPUT --out OUT` as a call. Its options, named like the flags
+//! (snake_case), fill the library's `RunOptions` as the command line's flags do, and
+//! `visage::run_clip` runs them as it runs the command line's: the same files, exports
+//! included, and the same error messages. The frames done are reported to a Python callable;
+//! the GIL is released while the run works and taken only to call back.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
 use visage::{
-    error_chain, file_names, Camera, DepthKind, DepthNetwork, DepthSequence, DepthSource,
-    FaceTarget, FolderOptions, FrameMetrics, FrameSink, Input, Intrinsics, MeshKind, ModelSource,
-    NetworkConfig, PlyFormat, Reconstructor, TemporalMode, DEFAULT_SUBDIVISION,
+    ClipProgress, Faces, FrameMetrics, FrameSink, MeshKind, ModelSource, RunOptions, TemporalMode,
 };
 
 use crate::error::error;
 
-/// `visage run`'s options, as the Python call names them (`None`: the flag's default).
-struct RunOptions {
-    intrinsics: Option<PathBuf>,
-    fov_deg: Option<f64>,
-    depth: Option<String>,
-    depth_config: Option<PathBuf>,
-    depth_scale: Option<f64>,
-    lambda: Option<f64>,
-    mu: Option<f64>,
-    /// `Some(None)`: `--smoothing off`.
-    smoothing: Option<Option<f64>>,
-    latency: Option<usize>,
-    mesh: Option<String>,
-    mode: Option<String>,
-    subdivision: Option<usize>,
-    fair: Option<f64>,
-    keypoints: bool,
-    spacing: Option<u32>,
-    every: Option<usize>,
-    max_frames: Option<usize>,
-    models: Option<PathBuf>,
-    model: Option<PathBuf>,
-    no_fit: bool,
-    ply: bool,
-    save_raw: bool,
-    ascii: bool,
-    overwrite: bool,
-    resume: bool,
-}
-
 /// `value`, when given, is one of `choices` (as clap checks `--flag`'s), else a `ValueError`
 /// that lists them.
-fn choice(name: &str, value: &Option<String>, choices: &[&str]) -> PyResult<()> {
-    match value.as_deref() {
+fn choice<'a>(name: &str, value: Option<&'a str>, choices: &[&str]) -> PyResult<Option<&'a str>> {
+    match value {
         Some(v) if !choices.contains(&v) => Err(PyValueError::new_err(format!(
             "{name}={v:?}: must be one of {}",
             choices
@@ -63,130 +29,40 @@ fn choice(name: &str, value: &Option<String>, choices: &[&str]) -> PyResult<()> 
                 .collect::<Vec<_>>()
                 .join(", ")
         ))),
-        _ => Ok(()),
+        v => Ok(v),
     }
 }
 
-impl RunOptions {
-    /// The input (frame selection applied) and the reconstructor for it, as
-    /// `PipelineArgs::open_for` in the command line makes them (its messages included).
-    fn open(&self, input: &Path) -> Result<(Input, Reconstructor), String> {
-        let given = self
-            .intrinsics
-            .as_ref()
-            .map(|path| Intrinsics::load_json(path))
-            .transpose()
-            .map_err(|e| error_chain(&e))?;
-        let mut opened = Input::open(input).map_err(|e| error_chain(&e))?;
-        opened = opened
-            .every(self.every.unwrap_or(1))
-            .map_err(|e| error_chain(&e))?;
-        if let Some(m) = self.max_frames {
-            opened = opened.max_frames(m).map_err(|e| error_chain(&e))?;
+/// The combinations the command line's parser refuses: options given together that conflict,
+/// or one given without another it needs.
+fn check_combinations(given: &[(&str, bool)]) -> PyResult<()> {
+    let on = |name: &str| given.iter().any(|&(n, g)| n == name && g);
+    let conflicts = [
+        ("input", "rgbd"),
+        ("rgbd", "depth"),
+        ("intrinsics", "fov_deg"),
+        ("model", "no_fit"),
+        ("overwrite", "resume"),
+    ];
+    for (a, b) in conflicts {
+        if on(a) && on(b) {
+            return Err(PyValueError::new_err(format!(
+                "{a} and {b} cannot be given together"
+            )));
         }
-        let camera = match (&self.intrinsics, given, self.fov_deg) {
-            (Some(path), Some(k), _) => {
-                let (w, h) = opened.size();
-                k.check_size(w, h).map_err(|e| {
-                    format!(
-                        "{}: intrinsics are for another image size than {} ({w}×{h}): {}",
-                        path.display(),
-                        input.display(),
-                        error_chain(&e)
-                    )
-                })?;
-                Camera::Intrinsics(k)
-            }
-            (_, _, Some(fov)) => Camera::FovDeg(fov),
-            _ => Camera::Auto,
-        };
-        let depth = match self.depth.as_deref().unwrap_or("face") {
-            "face" => DepthSource::Face,
-            "model" => DepthSource::Model,
-            network if network.to_ascii_lowercase().ends_with(".onnx") => {
-                let config = self
-                    .depth_config
-                    .as_ref()
-                    .map(|path| NetworkConfig::load(path))
-                    .transpose()
-                    .map_err(|e| error_chain(&e))?;
-                let net = DepthNetwork::load(network.as_ref(), config)
-                    .map_err(|e| format!("cannot use --depth: {}", error_chain(&e)))?;
-                DepthSource::maps(visage::AlignedNetwork::new(net))
-            }
-            dir => DepthSource::maps(
-                DepthSequence::open(
-                    dir.as_ref(),
-                    self.depth_scale.unwrap_or(1000.0),
-                    DepthKind::Z,
-                )
-                .map_err(|e| format!("cannot use --depth: {}", error_chain(&e)))?,
-            ),
-        };
-        let mut builder = Reconstructor::builder()
-            .camera(camera)
-            .depth(depth)
-            .mesh(match self.mesh.as_deref() {
-                Some("image") => MeshKind::Image,
-                Some("model") => MeshKind::Model,
-                _ => MeshKind::Face,
-            })
-            .mode(match self.mode.as_deref() {
-                Some("clip") => TemporalMode::Clip,
-                _ => TemporalMode::Streaming,
-            })
-            .subdivision(self.subdivision.unwrap_or(DEFAULT_SUBDIVISION))
-            .spacing(
-                self.spacing
-                    .unwrap_or(visage::MeshingOptions::default().spacing),
-            )
-            .landmark_smoothing(
-                self.smoothing
-                    .unwrap_or(Some(visage::DEFAULT_LANDMARK_SMOOTHING)),
-            )
-            .latency(self.latency.unwrap_or(visage::DEFAULT_LATENCY_FRAMES))
-            .fairing(self.fair)
-            .keypoint_motion(self.keypoints)
-            .face_target(FaceTarget::Largest);
-        if let Some(lambda) = self.lambda {
-            builder = builder.lambda(lambda);
-        }
-        if let Some(mu) = self.mu {
-            builder = builder.mu(mu);
-        }
-        if let Some(dir) = &self.models {
-            builder = builder.models_dir(dir);
-        }
-        if let Some(dir) = &self.model {
-            builder = builder.model(ModelSource::IctFolder(dir.clone()));
-        } else if self.no_fit {
-            builder = builder.model(ModelSource::None);
-        }
-        let reconstructor = builder.build_for(&opened).map_err(|e| error_chain(&e))?;
-        Ok((opened, reconstructor))
     }
-
-    /// The choices and combinations the command line's parser checks.
-    fn check(&self) -> PyResult<()> {
-        choice("mesh", &self.mesh, &["face", "image", "model"])?;
-        choice("mode", &self.mode, &["streaming", "clip"])?;
-        let conflicts = [
-            (
-                self.intrinsics.is_some() && self.fov_deg.is_some(),
-                "intrinsics and fov_deg",
-            ),
-            (self.model.is_some() && self.no_fit, "model and no_fit"),
-            (self.overwrite && self.resume, "overwrite and resume"),
-        ];
-        for (both, names) in conflicts {
-            if both {
-                return Err(PyValueError::new_err(format!(
-                    "{names} cannot be given together"
-                )));
-            }
+    let needs = [
+        ("depth_intrinsics", "rgbd"),
+        ("depth_intrinsics", "intrinsics"),
+        ("depth_to_color", "depth_intrinsics"),
+        ("keep_depth_edges", "rgbd"),
+    ];
+    for (a, b) in needs {
+        if on(a) && !on(b) {
+            return Err(PyValueError::new_err(format!("{a} needs {b}")));
         }
-        Ok(())
     }
+    Ok(())
 }
 
 /// Tells Python of the run's frames (the progress callable, with the GIL taken for it) and
@@ -220,8 +96,12 @@ impl PythonProgress {
     }
 }
 
+/// The faces' runs come back as the call's result: nothing more to tell.
+impl ClipProgress for PythonProgress {}
+
 impl FrameSink for PythonProgress {
     fn started(&mut self, frames: Option<usize>) {
+        self.done = 0;
         self.total = frames;
     }
 
@@ -243,10 +123,6 @@ impl FrameSink for PythonProgress {
     }
 }
 
-/// What a run did, for Python: `frames` processed, `meshed`, `kept` in the folder, and the
-/// summary as `metrics.json` has it (`None` when a resume found the run complete).
-type RunReport = (usize, usize, usize, Option<String>);
-
 /// `--smoothing`'s value: a positive number or `off` (`Some(None)`).
 fn smoothing(value: Option<String>) -> PyResult<Option<Option<f64>>> {
     let Some(s) = value else {
@@ -263,28 +139,36 @@ fn smoothing(value: Option<String>) -> PyResult<Option<Option<f64>>> {
     }
 }
 
-/// `visage run INPUT --out OUT [options]`; see the package's `visage.run`. `notify(kind,
-/// message)` is told the warnings (`"warning"`) and notices (`"notice"`) the command line
-/// prints; `smoothing` comes as text (a number or `off`). Returns `frames`, `meshed`, `kept`
-/// and `summary_json` (`metrics.json`'s summary).
+/// `visage run INPUT --out OUT [options]`; see the package's `visage.run`. `input` is `None`
+/// with `rgbd` (the recording is the input). `notify(kind, message)` is told the warnings
+/// (`"warning"`) and notices (`"notice"`) the command line prints; `smoothing` comes as text
+/// (a number or `off`). Returns a dict per face run (one, or with `faces="all"` each face's):
+/// its folder `dir`, `frames`, `meshed`, `kept`, `summary_json` (`metrics.json`'s summary) and
+/// `exports_json` (`export.json`'s contents, when exports were made).
 #[pyfunction]
-#[pyo3(signature = (input, out_dir, notify, progress=None, *, intrinsics=None, fov_deg=None,
-    depth=None, depth_config=None, depth_scale=None, lambda_=None, mu=None, smoothing=None,
+#[pyo3(signature = (input, out_dir, notify, progress=None, *, rgbd=None, depth_scale=None,
+    depth_intrinsics=None, depth_to_color=None, keep_depth_edges=false, depth_config=None,
+    intrinsics=None, fov_deg=None, depth=None, lambda_=None, mu=None, smoothing=None,
     latency=None, mesh=None, mode=None, subdivision=None, fair=None, keypoints=false,
     spacing=None, every=None, max_frames=None, models=None, model=None, no_fit=false,
-    ply=false, save_raw=false, ascii=false, overwrite=false, resume=false))]
+    ply=false, save_raw=false, ascii=false, overwrite=false, resume=false, faces=None,
+    glb=false, texture=false, plots=false, report=false, preview=false))]
 #[allow(clippy::too_many_arguments)]
-pub fn run(
-    py: Python<'_>,
-    input: PathBuf,
+pub fn run<'py>(
+    py: Python<'py>,
+    input: Option<PathBuf>,
     out_dir: PathBuf,
     notify: Py<PyAny>,
     progress: Option<Py<PyAny>>,
+    rgbd: Option<PathBuf>,
+    depth_scale: Option<f64>,
+    depth_intrinsics: Option<PathBuf>,
+    depth_to_color: Option<PathBuf>,
+    keep_depth_edges: bool,
+    depth_config: Option<PathBuf>,
     intrinsics: Option<PathBuf>,
     fov_deg: Option<f64>,
     depth: Option<String>,
-    depth_config: Option<PathBuf>,
-    depth_scale: Option<f64>,
     lambda_: Option<f64>,
     mu: Option<f64>,
     smoothing: Option<String>,
@@ -305,36 +189,88 @@ pub fn run(
     ascii: bool,
     overwrite: bool,
     resume: bool,
-) -> PyResult<Py<PyDict>> {
-    let options = RunOptions {
-        intrinsics,
-        fov_deg,
-        depth,
-        depth_config,
-        depth_scale,
-        lambda: lambda_,
-        mu,
-        smoothing: self::smoothing(smoothing)?,
-        latency,
-        mesh,
-        mode,
-        subdivision,
-        fair,
-        keypoints,
-        spacing,
-        every,
-        max_frames,
-        models,
-        model,
-        no_fit,
-        ply,
-        save_raw,
-        ascii,
-        overwrite,
-        resume,
+    faces: Option<String>,
+    glb: bool,
+    texture: bool,
+    plots: bool,
+    report: bool,
+    preview: bool,
+) -> PyResult<Bound<'py, PyList>> {
+    let mesh = choice("mesh", mesh.as_deref(), &["face", "image", "model"])?;
+    let mode = choice("mode", mode.as_deref(), &["streaming", "clip"])?;
+    let faces = choice("faces", faces.as_deref(), &["largest", "all"])?;
+    let smoothing = self::smoothing(smoothing)?;
+    check_combinations(&[
+        ("input", input.is_some()),
+        ("rgbd", rgbd.is_some()),
+        ("depth", depth.is_some()),
+        ("depth_intrinsics", depth_intrinsics.is_some()),
+        ("depth_to_color", depth_to_color.is_some()),
+        ("keep_depth_edges", keep_depth_edges),
+        ("intrinsics", intrinsics.is_some()),
+        ("fov_deg", fov_deg.is_some()),
+        ("model", model.is_some()),
+        ("no_fit", no_fit),
+        ("overwrite", overwrite),
+        ("resume", resume),
+    ])?;
+    let recording = rgbd.is_some();
+    let Some(input) = input.or(rgbd) else {
+        return Err(PyValueError::new_err("input or rgbd must be given"));
     };
-    options.check()?;
-    let out = out_dir;
+    let mut options = RunOptions::default();
+    let p = &mut options.pipeline;
+    p.rgbd = recording;
+    p.depth_scale = depth_scale;
+    p.depth_intrinsics = depth_intrinsics;
+    p.depth_to_color = depth_to_color;
+    p.keep_depth_edges = keep_depth_edges;
+    p.depth_config = depth_config;
+    p.intrinsics = intrinsics;
+    p.fov_deg = fov_deg;
+    p.depth = depth.unwrap_or(p.depth.clone());
+    p.lambda = lambda_;
+    p.mu = mu;
+    p.smoothing = smoothing.unwrap_or(p.smoothing);
+    p.latency = latency.unwrap_or(p.latency);
+    p.mesh = match mesh {
+        Some("image") => MeshKind::Image,
+        Some("model") => MeshKind::Model,
+        Some(_) => MeshKind::Face,
+        None => p.mesh,
+    };
+    p.mode = match mode {
+        Some("clip") => TemporalMode::Clip,
+        Some(_) => TemporalMode::Streaming,
+        None => p.mode,
+    };
+    p.subdivision = subdivision.unwrap_or(p.subdivision);
+    p.fair = fair;
+    p.keypoints = keypoints;
+    p.spacing = spacing.unwrap_or(p.spacing);
+    p.every = every.unwrap_or(p.every);
+    p.max_frames = max_frames;
+    p.models = models;
+    if let Some(dir) = model {
+        p.model = ModelSource::IctFolder(dir);
+    } else if no_fit {
+        p.model = ModelSource::None;
+    }
+    options.ply = ply;
+    options.save_raw = save_raw;
+    options.ascii = ascii;
+    options.overwrite = overwrite;
+    options.resume = resume;
+    options.faces = match faces {
+        Some("all") => Faces::All,
+        Some(_) => Faces::Largest,
+        None => options.faces,
+    };
+    options.exports.glb = glb;
+    options.exports.texture = texture;
+    options.exports.plots = plots;
+    options.exports.report = report;
+    options.exports.preview = preview;
     let stop = Arc::new(AtomicBool::new(false));
     let mut sink = PythonProgress {
         progress,
@@ -344,125 +280,23 @@ pub fn run(
         stop: stop.clone(),
         raised: None,
     };
-    let outcome = py.detach(|| run_folder(&input, &out, &options, &stop, &mut sink));
+    let outcome = py.detach(|| visage::run_clip(&input, &out_dir, &options, &stop, &mut sink));
     if let Some(e) = sink.raised {
         return Err(e);
     }
-    let (frames, meshed, kept, summary) = outcome.map_err(error)?;
-    let d = PyDict::new(py);
-    d.set_item("frames", frames)?;
-    d.set_item("meshed", meshed)?;
-    d.set_item("kept", kept)?;
-    d.set_item("summary_json", summary)?;
-    Ok(d.unbind())
-}
-
-/// The run itself (no GIL): what `run_with_stop` and `run_face` do in the command line for
-/// the largest face, the same messages for the same failures.
-fn run_folder(
-    input: &Path,
-    out: &Path,
-    options: &RunOptions,
-    stop: &Arc<AtomicBool>,
-    sink: &mut PythonProgress,
-) -> Result<RunReport, String> {
-    std::fs::metadata(input).map_err(|e| {
-        format!(
-            "{}: cannot read the input: {}",
-            input.display(),
-            error_chain(&e)
-        )
-    })?;
-    let claimed = visage::run_folder::claim(out, options.overwrite, options.resume)
-        .map_err(|e| error_chain(&e))?;
-    if let Some(cleared) = &claimed.cleared {
-        sink.notice(&format!(
-            "--overwrite: removed {} entries of the previous run from {} (it held {})",
-            cleared.removed.len(),
-            out.display(),
-            cleared.held
-        ));
+    let runs = outcome.map_err(|e| error(visage::error_chain(&e)))?;
+    let list = PyList::empty(py);
+    for face in &runs {
+        let d = PyDict::new(py);
+        d.set_item("dir", &face.dir)?;
+        d.set_item("frames", face.run.frames)?;
+        d.set_item("meshed", face.run.meshed)?;
+        d.set_item("kept", face.run.kept)?;
+        let summary = face.run.summary.as_ref().map(serde_json::to_string);
+        d.set_item("summary_json", summary.transpose().map_err(error)?)?;
+        let exports = face.exports.as_ref().map(serde_json::to_string);
+        d.set_item("exports_json", exports.transpose().map_err(error)?)?;
+        list.append(d)?;
     }
-    let (opened, reconstructor) = options.open(input)?;
-    let format = if options.ascii {
-        PlyFormat::Ascii
-    } else {
-        PlyFormat::BinaryLittleEndian
-    };
-    let folder = FolderOptions {
-        input_name: input.display().to_string(),
-        input_file: visage::run_folder::InputFile::of(input).map_err(|e| error_chain(&e))?,
-        resume: options.resume,
-        ply: (format, options.ply, options.save_raw),
-        blendshapes: !options.no_fit,
-        keep: None,
-        stop: Some(stop.clone()),
-        target: FaceTarget::Largest,
-    };
-    let go_on = match visage::run_folder::RunParameters::cannot_resume(reconstructor.parameters()) {
-        None => "the same command with --resume goes on from there".to_owned(),
-        Some(reason) => format!("it cannot be resumed: {reason}"),
-    };
-    let run =
-        visage::run_into(opened, reconstructor, out, folder, sink).map_err(|e| error_chain(&e))?;
-    let summary = run
-        .summary
-        .as_ref()
-        .map(|s| serde_json::to_string(s).unwrap_or_default());
-    let Some(e) = run.error else {
-        return Ok((run.frames, run.meshed, run.kept, summary));
-    };
-    let plural = |n: usize| if n == 1 { "" } else { "s" };
-    Err(match e {
-        visage::Error::Interrupted => format!(
-            "interrupted after {} frames: their meshes, {} and {} (status \"interrupted\") are \
-             in {}; `visage export {}` makes the other files; {go_on}",
-            run.frames,
-            file_names::LANDMARKS,
-            file_names::METRICS,
-            out.display(),
-            out.display()
-        ),
-        e @ visage::Error::NoFace { .. } => format!(
-            "{}: nothing to mesh ({} is in {}): {}",
-            input.display(),
-            file_names::METRICS,
-            out.display(),
-            error_chain(&e)
-        ),
-        e => {
-            let kept = if run.finished {
-                format!(
-                    "stopped after {} frame{}: the files in {} hold {} frame{}",
-                    run.frames,
-                    plural(run.frames),
-                    out.display(),
-                    run.kept,
-                    plural(run.kept),
-                )
-            } else {
-                format!(
-                    "stopped after {} frame{}: what was written of them stays in {} under \
-                     temporary names ({})",
-                    run.frames,
-                    plural(run.frames),
-                    out.display(),
-                    file_names::TMP_SUFFIX
-                )
-            };
-            let context = match &run.metrics_error {
-                None => format!(
-                    "{kept}, and {} says \"failed\"; {go_on}",
-                    file_names::METRICS
-                ),
-                Some(m) => format!(
-                    "{kept}, but {} could not be written either ({}); once the cause is \
-                     fixed, the same command with --resume goes on from there",
-                    file_names::METRICS,
-                    error_chain(m)
-                ),
-            };
-            format!("{context}: {}", error_chain(&e))
-        }
-    })
+    Ok(list)
 }

@@ -187,6 +187,18 @@ pub struct Cleared {
     pub held: String,
 }
 
+impl Cleared {
+    /// What `--overwrite` removed from `dir`, in words.
+    pub fn describe(&self, dir: &Path) -> String {
+        format!(
+            "--overwrite: removed {} entries of the previous run from {} (it held {})",
+            self.removed.len(),
+            dir.display(),
+            self.held
+        )
+    }
+}
+
 /// An output folder taken for a run: its lock (held until dropped) and what `--overwrite`
 /// removed.
 #[derive(Debug)]

@@ -92,7 +92,7 @@ pub enum TemporalMode {
 }
 
 /// Which morphable face model is fitted to the landmarks.
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub enum ModelSource {
     /// The compact ICT-FaceKit model shipped with visage (30 identity modes, 53 expressions).
     #[default]

@@ -7,6 +7,7 @@ use visage_camera::CameraError;
 use visage_face::FaceError;
 use visage_fem::FemError;
 use visage_fusion::FusionError;
+use visage_run_folder::file_names;
 use visage_video::VideoError;
 
 /// What can stop a reconstruction.
@@ -50,6 +51,32 @@ pub enum Error {
     /// An input holds nothing to process.
     #[error("{}: {reason}", path.display())]
     Input { path: PathBuf, reason: String },
+    /// An input cannot be read at all (missing, not allowed).
+    #[error("{}: cannot read the input", path.display())]
+    Unreadable {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// What an option names cannot be used (`flag` as the command line spells it; the source
+    /// says why).
+    #[error("cannot use {flag}")]
+    CannotUse {
+        flag: &'static str,
+        source: Box<Error>,
+    },
+    /// An intrinsics file for another image size than the input's (`width` × `height`).
+    #[error(
+        "{}: intrinsics are for another image size than {} ({width}×{height})",
+        path.display(),
+        input.display()
+    )]
+    IntrinsicsSize {
+        path: PathBuf,
+        input: PathBuf,
+        width: u32,
+        height: u32,
+        source: CameraError,
+    },
     /// No frame of the input got a mesh: neither detector found a face, or (`unfit` frames)
     /// one was found but its metric fit failed, for `reason`.
     #[error("{}", no_face_in_words(*frames, *unfit, reason.as_deref()))]
@@ -58,9 +85,34 @@ pub enum Error {
         unfit: usize,
         reason: Option<String>,
     },
+    /// No frame of the input shows a face, for a run over every face.
+    #[error("{}: no face was found in any frame", path.display())]
+    NoFaceInInput { path: PathBuf },
     /// The run was asked to stop (Ctrl-C, SIGTERM); the frames before it are complete.
     #[error("interrupted")]
     Interrupted,
+    /// A run into the folder `dir` was asked to stop after `frames` frames: where its files
+    /// are, and how to go on (`go_on`).
+    #[error(
+        "interrupted after {frames} frames: their meshes, {} and {} (status \"interrupted\") \
+         are in {}; `visage export {}` makes the other files; {go_on}",
+        file_names::LANDMARKS,
+        file_names::METRICS,
+        dir.display(),
+        dir.display()
+    )]
+    RunInterrupted {
+        frames: usize,
+        dir: PathBuf,
+        go_on: String,
+    },
+    /// A run into a folder stopped on `source` (which is [`Error::NoFace`] when no frame got
+    /// a mesh); `context` says what the folder holds and how to go on.
+    #[error("{context}")]
+    RunStopped { context: String, source: Box<Error> },
+    /// An export after the run failed.
+    #[error(transparent)]
+    Export(#[from] visage_export::ExportError),
     /// A stage thread panicked (a bug).
     #[error("internal error: the {0} stage panicked")]
     Panic(&'static str),
@@ -91,7 +143,9 @@ impl Error {
     pub fn is_internal(&self) -> bool {
         match self {
             Error::Panic(_) => true,
-            Error::Frame { source, .. } => source.is_internal(),
+            Error::Frame { source, .. }
+            | Error::CannotUse { source, .. }
+            | Error::RunStopped { source, .. } => source.is_internal(),
             _ => false,
         }
     }

@@ -166,6 +166,7 @@ pub fn run_into(
     };
     let mut outcome = reconstructor.run(input, &mut sink);
     let mut out = sink.out;
+    progress.ended();
     if stop.is_some_and(|s| s.load(Ordering::SeqCst)) && outcome.error.is_none() {
         outcome.error = Some(Error::Interrupted);
     }

@@ -35,6 +35,8 @@
 //! whole input with decoding, tracking and fusion on their own threads, in streaming or clip
 //! mode ([`TemporalMode`]), into a [`FrameSink`] such as [`OutputDir`] (the point cache
 //! `sequence.pc2` with `mesh.obj`, PLY meshes on request, `landmarks.json`, `metrics.json`). `examples/reconstruct.rs` writes a PLY per frame.
+//! [`run_clip`] is `visage run` as one call: its flags as the fields of [`RunOptions`], the
+//! output folder with its exports written as the command line writes them.
 //!
 //! # Conventions
 //! - Camera coordinates: x right, y down, z forward, metres; pixel `(i, j)`'s centre at
@@ -44,6 +46,7 @@
 
 #![forbid(unsafe_code)]
 
+mod clip_run;
 mod config;
 mod depth_folder;
 mod depth_stage;
@@ -56,14 +59,17 @@ mod keypoint_motion;
 mod landmark_reader;
 pub mod live;
 mod pipeline;
+mod pipeline_options;
 pub mod process_stats;
 mod quality;
 mod reconstructor;
 mod recorder;
 mod rigid_jitter;
+mod run_options;
 mod sink;
 mod stages;
 
+pub use clip_run::{run_clip, ClipProgress, FaceRun};
 pub use config::{
     check_fov, Builder, Camera, DepthSource, ModelSource, Parameters, TemporalMode,
     DEFAULT_SUBDIVISION,
@@ -75,7 +81,9 @@ pub use first_faces::first_faces;
 pub use folder_run::{run_into, FolderOptions, FolderRun};
 pub use input::{FrameFilter, Input, KeptFrames};
 pub use landmark_reader::{FrameFaces, LandmarkReader};
+pub use pipeline_options::{PipelineOptions, DEFAULT_DEPTH_SCALE};
 pub use reconstructor::{error_chain, FrameResult, Identity, Reconstructor, RunOutcome};
+pub use run_options::{Faces, RunOptions};
 pub use sink::{FrameSink, MeshFrame};
 pub use stages::{Irises, Surfaces};
 
@@ -85,6 +93,7 @@ pub use visage_depth::{
     DepthSequence, EdgeMask, NetworkConfig, NetworkRegion, OutputKind, ProvidedDepth, Registration,
     RgbdLayout, RgbdOptions, RgbdRecording,
 };
+pub use visage_export::{ExportOptions, ExportSummary};
 pub use visage_face::{
     FaceTarget, CLIP_LATENCY_FRAMES, DEFAULT_FRAME_INTERVAL_S, DEFAULT_LANDMARK_SMOOTHING,
     DEFAULT_LATENCY_FRAMES, MAX_LATENCY_FRAMES,

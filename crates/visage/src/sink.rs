@@ -51,6 +51,17 @@ pub trait FrameSink {
     /// Something the user may want to know about the run that is not a problem (what a
     /// resumed run kept).
     fn notice(&mut self, _message: &str) {}
+
+    /// A notice the user should have even when they asked for no notices (a quiet command
+    /// line): what the run assumed for them (the camera from an image's EXIF or a dataset's
+    /// default) or removed from their folder (`overwrite`). By default a notice.
+    fn caution(&mut self, message: &str) {
+        self.notice(message);
+    }
+
+    /// A run into an output folder ([`crate::run_into`]) has had its last frame (its files
+    /// are finished next, and then any exports made).
+    fn ended(&mut self) {}
 }
 
 impl FrameSink for () {}

@@ -23,8 +23,7 @@ pub struct BenchArgs {
 /// Runs `visage bench`.
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let p = &args.pipeline;
-    std::fs::metadata(p.input_path())
-        .with_context(|| format!("{}: cannot read the input", p.input_path().display()))?;
+    p.options().check_input(p.input_path())?;
     let (input, reconstructor) = p.open()?;
     let bar = p.progress(&input);
     // Ctrl-C ends the input; the figures cover the frames so far.

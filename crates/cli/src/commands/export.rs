@@ -31,12 +31,8 @@ pub struct ExportArgs {
 }
 
 impl ExportArgs {
-    /// Whether any export is asked for.
-    pub fn any(&self) -> bool {
-        self.glb || self.texture || self.plots || self.report || self.preview
-    }
-
-    fn options(&self) -> ExportOptions {
+    /// The flags as the library's options.
+    pub fn options(&self) -> ExportOptions {
         ExportOptions {
             glb: self.glb,
             texture: self.texture,
@@ -62,9 +58,9 @@ pub struct ExportCommandArgs {
 
 /// Runs `visage export` (everything but the preview video when no export is named).
 pub fn run(args: ExportCommandArgs) -> anyhow::Result<()> {
-    let mut exports = args.exports;
+    let mut exports = args.exports.options();
     if !exports.any() {
-        exports = ExportArgs {
+        exports = ExportOptions {
             report: true,
             glb: true,
             texture: true,
@@ -77,20 +73,11 @@ pub fn run(args: ExportCommandArgs) -> anyhow::Result<()> {
         .written_by_visage()
         .then(|| visage::run_folder::FolderLock::acquire(&args.dir))
         .transpose()?;
-    let summary = exports_into(&args.dir, &exports, None)?;
+    let summary = export(&args.dir, &exports, None)?;
     if !args.quiet {
         print_summary(&args.dir, &summary);
     }
     Ok(())
-}
-
-/// Makes the exports `args` asks for in `dir`.
-pub fn exports_into(
-    dir: &Path,
-    args: &ExportArgs,
-    frames: Option<&[visage_video::Frame]>,
-) -> anyhow::Result<ExportSummary> {
-    Ok(export(dir, &args.options(), frames)?)
 }
 
 /// One line per file written, with its size and time.

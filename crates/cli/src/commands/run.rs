@@ -9,17 +9,14 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use clap::{Args, ValueEnum};
 use indicatif::ProgressBar;
 use visage::{
-    file_names, AlignedNetwork, Camera, DepthKind, DepthNetwork, DepthSequence, DepthSource,
-    EdgeMask, FaceTarget, FolderOptions, FrameMetrics, FrameSink, Input, Intrinsics, KeptFrames,
-    MeshKind, ModelSource, NetworkConfig, PlyFormat, Reconstructor, Registration, RgbdLayout,
-    RgbdOptions, RgbdRecording, RigidTransform, TemporalMode, DEFAULT_SUBDIVISION,
+    file_names, ClipProgress, FaceRun, FaceTarget, Faces, FrameMetrics, FrameSink, Input, MeshKind,
+    ModelSource, PipelineOptions, Reconstructor, RunOptions, TemporalMode, DEFAULT_SUBDIVISION,
 };
 
-use crate::commands::export::{exports_into, print_summary, ExportArgs};
+use crate::commands::export::{print_summary, ExportArgs};
 use crate::exit::Failure;
 use crate::interrupt;
 use crate::progress::progress_bar;
@@ -260,22 +257,12 @@ pub(crate) fn claim_output_folder(
 ) -> anyhow::Result<visage::run_folder::FolderLock> {
     let claimed = visage::run_folder::claim(out, overwrite, resume)?;
     if let Some(cleared) = claimed.cleared {
-        eprintln!(
-            "--overwrite: removed {} entries of the previous run from {} (it held {})",
-            cleared.removed.len(),
-            out.display(),
-            cleared.held
-        );
+        eprintln!("{}", cleared.describe(out));
     }
     Ok(claimed.lock)
 }
 
 impl PipelineArgs {
-    /// The input (frame selection applied) and a reconstructor set up for it.
-    pub fn open(&self) -> anyhow::Result<(Input, Reconstructor)> {
-        self.open_for(FaceTarget::Largest)
-    }
-
     /// The input's path: the video, folder or image, or the RGB-D recording.
     pub fn input_path(&self) -> &std::path::Path {
         match (&self.rgbd, &self.input) {
@@ -284,206 +271,56 @@ impl PipelineArgs {
         }
     }
 
-    /// The input, frame selection applied.
-    pub fn open_input(&self) -> anyhow::Result<Input> {
-        Ok(self.open_input_and_recording(None)?.0)
-    }
-
-    /// The input (frame selection applied) and, with --rgbd, its recording (`color`: the
-    /// colour camera, for the registration).
-    fn open_input_and_recording(
-        &self,
-        color: Option<Intrinsics>,
-    ) -> anyhow::Result<(Input, Option<RgbdRecording>)> {
-        let (mut input, recording) = match &self.rgbd {
-            None => (Input::open(self.input_path())?, None),
-            Some(dir) => {
-                let recording = self.open_recording(dir, color)?;
-                let paths: Vec<PathBuf> =
-                    recording.frames.iter().map(|f| f.color.clone()).collect();
-                let times: Option<Vec<f64>> = recording.frames.iter().map(|f| f.time_s).collect();
-                let input = match times {
-                    Some(times) => Input::timed_images(dir, paths, times, recording.frame_rate())?,
-                    // Untimed folder pairs go in name order, as rgb/ lists them.
-                    None => Input::open(&dir.join("rgb"))?,
-                };
-                (input, Some(recording))
-            }
-        };
-        input = input.every(self.every)?;
-        if let Some(m) = self.max_frames {
-            input = input.max_frames(m)?;
-        }
-        Ok((input, recording))
-    }
-
-    /// The RGB-D recording in `dir`, registered to `color` when --depth-intrinsics is given.
-    fn open_recording(
-        &self,
-        dir: &std::path::Path,
-        color: Option<Intrinsics>,
-    ) -> anyhow::Result<RgbdRecording> {
-        let registration = match (&self.depth_intrinsics, color) {
-            (Some(path), Some(color)) => Some(Registration {
-                depth: Intrinsics::load_json(path)?,
-                color,
-                depth_to_color: match &self.depth_to_color {
-                    Some(t) => RigidTransform::load_json(t)?,
-                    None => RigidTransform::IDENTITY,
-                },
-            }),
-            _ => None,
-        };
-        let options = RgbdOptions {
+    /// The flags as the library's options.
+    pub fn options(&self) -> PipelineOptions {
+        PipelineOptions {
+            rgbd: self.rgbd.is_some(),
             depth_scale: self.depth_scale,
-            registration,
-            edges: (!self.keep_depth_edges).then(EdgeMask::default),
-            ..RgbdOptions::default()
-        };
-        let recording = RgbdRecording::open(dir, &options).context("cannot use --rgbd")?;
-        if !self.quiet {
-            eprintln!(
-                "{}: {} recording, {} colour frames, {} with a depth map within {:.0} ms{}",
-                dir.display(),
-                match recording.layout {
-                    RgbdLayout::Tum => "TUM RGB-D",
-                    RgbdLayout::Folders => "rgb/ + depth/",
-                },
-                recording.frames.len(),
-                recording.associated(),
-                options.max_time_difference_s * 1e3,
-                match recording.unmatched_depth {
-                    0 => String::new(),
-                    n => format!(" ({n} depth maps matched no colour frame)"),
-                }
-            );
-        }
-        Ok(recording)
-    }
-
-    /// [`PipelineArgs::open`] for a run that follows `target`.
-    pub fn open_for(&self, target: FaceTarget) -> anyhow::Result<(Input, Reconstructor)> {
-        let given = self
-            .intrinsics
-            .as_ref()
-            .map(|path| Intrinsics::load_json(path))
-            .transpose()?;
-        let (input, recording) = self.open_input_and_recording(given)?;
-        let camera = match (&self.intrinsics, self.fov_deg) {
-            (Some(path), _) => {
-                let k = given.expect("loaded above");
-                let (w, h) = input.size();
-                k.check_size(w, h).with_context(|| {
-                    format!(
-                        "{}: intrinsics are for another image size than {} ({w}×{h})",
-                        path.display(),
-                        self.input_path().display()
-                    )
-                })?;
-                Camera::Intrinsics(k)
-            }
-            (None, Some(fov)) => Camera::FovDeg(fov),
-            (None, None)
-                if recording
-                    .as_ref()
-                    .is_some_and(|r| r.layout == RgbdLayout::Tum)
-                    && input.size() == (640, 480) =>
-            {
-                eprintln!(
-                    "intrinsics: the TUM RGB-D default camera (fx = fy = 525, cx = 319.5, \
-                     cy = 239.5; the freiburg calibrations differ by up to 1.5 %); pass \
-                     --intrinsics for yours"
-                );
-                Camera::Intrinsics(Intrinsics::new(640, 480, 525.0, 525.0, 319.5, 239.5)?)
-            }
-            (None, None) => {
-                if let Some((path, f35)) = input.exif_focal_35mm() {
-                    eprintln!(
-                        "intrinsics: {f35} mm (35 mm equivalent) from the EXIF of {}",
-                        path.display()
-                    );
-                }
-                Camera::Auto
-            }
-        };
-        let depth = match (recording, self.depth.as_str()) {
-            (Some(recording), _) => DepthSource::maps(recording),
-            (None, "face") => DepthSource::Face,
-            (None, "model") => DepthSource::Model,
-            (None, network) if network.to_ascii_lowercase().ends_with(".onnx") => {
-                let config = self
-                    .depth_config
-                    .as_ref()
-                    .map(|path| NetworkConfig::load(path))
-                    .transpose()?;
-                let net =
-                    DepthNetwork::load(network.as_ref(), config).context("cannot use --depth")?;
-                if !self.quiet {
-                    let (iw, ih) = net.input_size();
-                    let (ow, oh) = net.output_size();
-                    let c = net.config();
-                    eprintln!(
-                        "depth network {network}: {iw}×{ih} in, {ow}×{oh} {} out, on the {}, \
-                         aligned {}",
-                        format!("{:?}", c.output.kind).to_lowercase(),
-                        match c.region {
-                            visage::NetworkRegion::Face => "face",
-                            visage::NetworkRegion::Frame => "whole frame",
-                        },
-                        match c.alignment() {
-                            visage::AlignMode::None => "not at all (metric)",
-                            visage::AlignMode::Scale => "by a scale per frame",
-                            _ => "by a scale and shift per frame",
-                        }
-                    );
-                }
-                DepthSource::maps(AlignedNetwork::new(net))
-            }
-            (None, dir) => DepthSource::maps(
-                DepthSequence::open(
-                    dir.as_ref(),
-                    self.depth_scale.unwrap_or(1000.0),
-                    DepthKind::Z,
-                )
-                .context("cannot use --depth")?,
-            ),
-        };
-        let mut builder = Reconstructor::builder()
-            .camera(camera)
-            .depth(depth)
-            .mesh(match self.mesh {
+            depth_intrinsics: self.depth_intrinsics.clone(),
+            depth_to_color: self.depth_to_color.clone(),
+            keep_depth_edges: self.keep_depth_edges,
+            depth_config: self.depth_config.clone(),
+            intrinsics: self.intrinsics.clone(),
+            fov_deg: self.fov_deg,
+            depth: self.depth.clone(),
+            lambda: self.lambda,
+            mu: self.mu,
+            smoothing: self.smoothing.0,
+            latency: self.latency,
+            mesh: match self.mesh {
                 MeshArg::Face => MeshKind::Face,
                 MeshArg::Image => MeshKind::Image,
                 MeshArg::Model => MeshKind::Model,
-            })
-            .mode(match self.mode {
+            },
+            mode: match self.mode {
                 ModeArg::Streaming => TemporalMode::Streaming,
                 ModeArg::Clip => TemporalMode::Clip,
-            })
-            .subdivision(self.subdivision)
-            .spacing(self.spacing);
-        builder = builder
-            .landmark_smoothing(self.smoothing.0)
-            .latency(self.latency)
-            .fairing(self.fair)
-            .keypoint_motion(self.keypoints)
-            .face_target(target);
-        if let Some(lambda) = self.lambda {
-            builder = builder.lambda(lambda);
+            },
+            subdivision: self.subdivision,
+            fair: self.fair,
+            keypoints: self.keypoints,
+            spacing: self.spacing,
+            every: self.every,
+            max_frames: self.max_frames,
+            models: self.models.clone(),
+            model: match (&self.model, self.no_fit) {
+                (Some(dir), _) => ModelSource::IctFolder(dir.clone()),
+                (None, true) => ModelSource::None,
+                (None, false) => ModelSource::Embedded,
+            },
         }
-        if let Some(mu) = self.mu {
-            builder = builder.mu(mu);
-        }
-        if let Some(dir) = &self.models {
-            builder = builder.models_dir(dir);
-        }
-        if let Some(dir) = &self.model {
-            builder = builder.model(ModelSource::IctFolder(dir.clone()));
-        } else if self.no_fit {
-            builder = builder.model(ModelSource::None);
-        }
-        let reconstructor = builder.build_for(&input)?;
-        Ok((input, reconstructor))
+    }
+
+    /// The input (frame selection applied) and a reconstructor set up for it, what they say
+    /// printed (notices not with `--quiet`).
+    pub fn open(&self) -> anyhow::Result<(Input, Reconstructor)> {
+        let mut terminal = Terminal {
+            bar: ProgressBar::hidden(),
+            quiet: self.quiet,
+        };
+        Ok(self
+            .options()
+            .open(self.input_path(), FaceTarget::Largest, &mut terminal)?)
     }
 
     /// The progress bar for `input` (hidden with `--quiet`).
@@ -492,11 +329,30 @@ impl PipelineArgs {
     }
 }
 
-/// A run's progress on the terminal: the bar, warnings and notices (the results go to the
-/// output folder, not here).
+impl RunArgs {
+    /// The flags as the library's options.
+    pub fn options(&self) -> RunOptions {
+        RunOptions {
+            pipeline: self.pipeline.options(),
+            ply: self.ply,
+            save_raw: self.save_raw,
+            ascii: self.ascii,
+            overwrite: self.overwrite,
+            resume: self.resume,
+            faces: match self.faces {
+                FacesArg::Largest => Faces::Largest,
+                FacesArg::All => Faces::All,
+            },
+            exports: self.exports.options(),
+        }
+    }
+}
+
+/// A run's progress on the terminal: the bar, warnings and notices, and each face's closing
+/// lines (the results go to the output folder, not here).
 struct Terminal {
     bar: ProgressBar,
-    /// Notices are not printed, and the bar is hidden.
+    /// Notices are not printed (cautions are), and the bar is hidden.
     quiet: bool,
 }
 
@@ -514,6 +370,43 @@ impl FrameSink for Terminal {
         if !self.quiet {
             self.bar.suspend(|| eprintln!("{message}"));
         }
+    }
+    fn caution(&mut self, message: &str) {
+        self.bar.suspend(|| eprintln!("{message}"));
+    }
+    fn ended(&mut self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+impl ClipProgress for Terminal {
+    fn face_done(&mut self, face: &FaceRun) {
+        let (Some(s), false) = (&face.run.summary, self.quiet) else {
+            return;
+        };
+        let dir = &face.dir;
+        if let Some(exports) = &face.exports {
+            print_summary(dir, exports);
+        }
+        if let Some(point) = &face.run.resumed {
+            eprint!(
+                "resumed after frame {} ({} frames kept): ",
+                point.after_frame, point.frames
+            );
+        }
+        eprintln!(
+            "{} frames ({} meshed, {} without a face) → {}; {:.1} fps, CPU {:.2}, \
+             peak RSS {:.0} MiB; landmark jitter {:.3} px, {:.2}× steadier than tracked",
+            s.frames,
+            s.solved + s.carried,
+            s.no_face,
+            dir.display(),
+            s.fps,
+            s.cpu_use.unwrap_or(0.0),
+            s.peak_rss_mib.unwrap_or(0.0),
+            s.quality.image_jitter_px.fused.unwrap_or(0.0),
+            s.quality.image_jitter_reduction.unwrap_or(0.0),
+        );
     }
 }
 
@@ -542,234 +435,35 @@ pub fn run_with_stop(
     args: RunArgs,
     stop: &std::sync::Arc<std::sync::atomic::AtomicBool>,
 ) -> anyhow::Result<()> {
-    let p = &args.pipeline;
-    std::fs::metadata(p.input_path())
-        .with_context(|| format!("{}: cannot read the input", p.input_path().display()))?;
-    // With --resume, a previous run is continued rather than refused.
-    let _lock = claim_output_folder(&args.out, args.overwrite, args.resume)?;
-    // Ctrl-C ends the input: the frames read so far go through and are written.
-    if args.faces == FacesArg::Largest {
-        return run_face(&args, &args.out, FaceTarget::Largest, stop).map(|_| ());
-    }
-    let models = p
-        .models
-        .clone()
-        .unwrap_or_else(visage_face::model_files::models_dir);
-    let faces = visage::first_faces(p.open_input()?, &models)?;
-    if faces.is_empty() {
-        return Err(Failure {
-            code: crate::exit::NO_FACE,
-            error: anyhow::anyhow!(
-                "{}: no face was found in any frame",
-                p.input_path().display()
-            ),
-        }
-        .into());
-    }
-    if !p.quiet {
-        eprintln!(
-            "{} face{} in frame {}: each is tracked into its own folder",
-            faces.len(),
-            if faces.len() == 1 { "" } else { "s" },
-            faces[0].0
-        );
-    }
-    let mut records = Vec::new();
-    let mut first_error = None;
-    for (id, (frame, bbox)) in (1..).zip(&faces) {
-        let folder = format!("{}{id}", file_names::FACE_FOLDER_PREFIX);
-        let dir = args.out.join(&folder);
-        let result = run_face(&args, &dir, FaceTarget::Near(*bbox), stop);
-        let (status, meshed) = match &result {
-            Ok(meshed) => ("complete".to_owned(), *meshed),
-            Err(_) => ended_as(&dir),
-        };
-        records.push(serde_json::json!({
-            "id": id,
-            "folder": folder,
-            "first_frame": frame,
-            "bbox": bbox,
-            "status": status,
-            "frames_meshed": meshed,
-        }));
-        if let Err(e) = result {
-            let interrupted = e
-                .downcast_ref::<Failure>()
-                .is_some_and(|f| f.code == interrupt::INTERRUPTED);
-            first_error.get_or_insert(e);
-            if interrupted {
-                break;
-            }
-        }
-    }
-    visage::write_json_atomically(
-        &args.out.join(file_names::FACES),
-        &serde_json::json!({ "input": p.input_path().display().to_string(), "faces": records }),
-    )?;
-    first_error.map_or(Ok(()), Err)
-}
-
-/// How the run in `dir` ended, as its metrics.json says (`"failed"` when it has none): its
-/// status and the frames it meshed.
-fn ended_as(dir: &std::path::Path) -> (String, usize) {
-    let m = std::fs::read(dir.join(file_names::METRICS))
-        .ok()
-        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
-        .unwrap_or_default();
-    let count = |v: &serde_json::Value| v.as_u64().unwrap_or(0) as usize;
-    let meshed = count(&m["summary"]["solved"])
-        + count(&m["summary"]["carried"])
-        + count(&m["resumed"]["meshed"]);
-    let status = m["status"].as_str().unwrap_or("failed").to_owned();
-    (status, meshed)
-}
-
-/// One tracked face's run into `dir` (continued with `--resume`): the frames meshed, or the
-/// error (exit code attached).
-fn run_face(
-    args: &RunArgs,
-    dir: &std::path::Path,
-    target: FaceTarget,
-    stop: &std::sync::Arc<std::sync::atomic::AtomicBool>,
-) -> anyhow::Result<usize> {
-    let p = &args.pipeline;
-    let (input, reconstructor) = p.open_for(target)?;
-    // The frames the texture is fused from, kept as they are decoded (no second decode).
-    let kept = KeptFrames::default();
-    let keep = args.exports.any().then(|| {
-        let select: visage::FrameFilter =
-            Box::new(visage_export::texture_frames(input.frame_rate()));
-        (select, kept.clone())
-    });
-    let format = if args.ascii {
-        PlyFormat::Ascii
-    } else {
-        PlyFormat::BinaryLittleEndian
-    };
-    let options = FolderOptions {
-        input_name: p.input_path().display().to_string(),
-        input_file: visage::run_folder::InputFile::of(p.input_path())?,
-        resume: args.resume,
-        ply: (format, args.ply, args.save_raw),
-        blendshapes: !p.no_fit,
-        keep,
-        stop: Some(stop.clone()),
-        target,
-    };
-    let mut progress = Terminal {
+    let mut terminal = Terminal {
         bar: ProgressBar::hidden(),
-        quiet: p.quiet,
+        quiet: args.pipeline.quiet,
     };
-    // What the closing message advises: going on with --resume, or why this run cannot.
-    let go_on = match visage::run_folder::RunParameters::cannot_resume(reconstructor.parameters()) {
-        None => "the same command with --resume goes on from there".to_owned(),
-        Some(reason) => format!("it cannot be resumed: {reason}"),
-    };
-    let run = visage::run_into(input, reconstructor, dir, options, &mut progress);
-    progress.bar.finish_and_clear();
-    let run = run?;
-    let Some(s) = &run.summary else {
-        return Ok(run.meshed);
-    };
-    match run.error {
-        Some(visage::Error::Interrupted) => {
-            return Err(Failure {
-                code: interrupt::INTERRUPTED,
-                error: anyhow::anyhow!(
-                    "interrupted after {} frames: their meshes, {} and {} \
-                     (status \"interrupted\") are in {}; `visage export {}` makes the other \
-                     files; {go_on}",
-                    run.frames,
-                    file_names::LANDMARKS,
-                    file_names::METRICS,
-                    dir.display(),
-                    dir.display()
-                ),
-            }
-            .into())
-        }
-        Some(e @ visage::Error::NoFace { .. }) => {
-            return Err(Failure {
-                code: crate::exit::NO_FACE,
-                error: anyhow::Error::new(e).context(format!(
-                    "{}: nothing to mesh ({} is in {})",
-                    p.input_path().display(),
-                    file_names::METRICS,
-                    dir.display()
-                )),
-            }
-            .into())
-        }
-        Some(e) => {
-            let kept = if run.finished {
-                format!(
-                    "stopped after {} frame{}: the files in {} hold {} frame{}",
-                    run.frames,
-                    if run.frames == 1 { "" } else { "s" },
-                    dir.display(),
-                    run.kept,
-                    if run.kept == 1 { "" } else { "s" },
-                )
-            } else {
-                format!(
-                    "stopped after {} frame{}: what was written of them stays in {} under \
-                     temporary names ({})",
-                    run.frames,
-                    if run.frames == 1 { "" } else { "s" },
-                    dir.display(),
-                    file_names::TMP_SUFFIX
-                )
-            };
-            let context = match &run.metrics_error {
-                None => format!(
-                    "{kept}, and {} says \"failed\"; {go_on}",
-                    file_names::METRICS
-                ),
-                Some(m) => format!(
-                    "{kept}, but {} could not be written either ({}); once the cause is \
-                     fixed, the same command with --resume goes on from there",
-                    file_names::METRICS,
-                    with_causes(m)
-                ),
-            };
-            return Err(anyhow::Error::new(e).context(context));
-        }
-        None => {}
-    }
-    if args.exports.any() {
-        let summary = exports_into(dir, &args.exports, Some(&kept.take()))?;
-        if !p.quiet {
-            print_summary(dir, &summary);
-        }
-    }
-    if !p.quiet {
-        if let Some(point) = &run.resumed {
-            eprint!(
-                "resumed after frame {} ({} frames kept): ",
-                point.after_frame, point.frames
-            );
-        }
-        eprintln!(
-            "{} frames ({} meshed, {} without a face) → {}; {:.1} fps, CPU {:.2}, \
-             peak RSS {:.0} MiB; landmark jitter {:.3} px, {:.2}× steadier than tracked",
-            s.frames,
-            s.solved + s.carried,
-            s.no_face,
-            dir.display(),
-            s.fps,
-            s.cpu_use.unwrap_or(0.0),
-            s.peak_rss_mib.unwrap_or(0.0),
-            s.quality.image_jitter_px.fused.unwrap_or(0.0),
-            s.quality.image_jitter_reduction.unwrap_or(0.0),
-        );
-    }
-    Ok(run.meshed)
+    let input = args.pipeline.input_path();
+    let run = visage::run_clip(input, &args.out, &args.options(), stop, &mut terminal);
+    terminal.bar.finish_and_clear();
+    run.map(|_| ()).map_err(with_exit_code)
 }
 
-/// `error` and its causes, as one line.
-fn with_causes(error: &dyn std::error::Error) -> String {
-    std::iter::successors(Some(error), |e| e.source())
-        .map(|e| e.to_string())
-        .collect::<Vec<_>>()
-        .join(": ")
+/// `e` with the exit code it calls for: 130 for a run interrupted, 3 when no face was found,
+/// else the code [`crate::exit::code_of`] gives it.
+fn with_exit_code(e: visage::Error) -> anyhow::Error {
+    let code = match &e {
+        visage::Error::RunInterrupted { .. } => Some(interrupt::INTERRUPTED),
+        visage::Error::NoFaceInInput { .. } => Some(crate::exit::NO_FACE),
+        visage::Error::RunStopped { source, .. }
+            if matches!(**source, visage::Error::NoFace { .. }) =>
+        {
+            Some(crate::exit::NO_FACE)
+        }
+        _ => None,
+    };
+    match code {
+        Some(code) => Failure {
+            code,
+            error: e.into(),
+        }
+        .into(),
+        None => e.into(),
+    }
 }
