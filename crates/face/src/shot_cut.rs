@@ -34,6 +34,21 @@ pub const CUT_FACE_CHANGE: f64 = 0.6;
 /// Face thumbnail side, cells.
 const FACE_THUMB: usize = 16;
 
+/// The picture thumbnail samples every second pixel of every second row up to this many pixels
+/// on the frame's longer side, and proportionally fewer beyond (every fourth up to twice this,
+/// …), so that a 4K frame costs about what a 1080p one does.
+const PICTURE_SAMPLING_SIDE: usize = 1920;
+
+/// The same for the face thumbnail and the longer side of the landmarks' box.
+const FACE_SAMPLING_SIDE: usize = 1024;
+
+/// The sampling step (pixels, in both directions) over an extent whose longer side is `side`:
+/// 2, or more for a side over `limit` (an even step, so that the sampled grid stays that of
+/// every second pixel, thinned).
+fn sampling_step(side: usize, limit: usize) -> usize {
+    2 * side.div_ceil(limit).max(1)
+}
+
 /// Watches consecutive frames for cuts.
 #[derive(Default)]
 pub struct CutDetector {
@@ -88,7 +103,7 @@ impl CutDetector {
 }
 
 /// The grey thumbnail of the landmarks' box: [`FACE_THUMB`]² cells, each the mean grey of
-/// every second pixel of every second row in it, less the cells' mean and over their standard deviation
+/// every second pixel of every second row in it (sparser in a box over [`FACE_SAMPLING_SIDE`]), less the cells' mean and over their standard deviation
 /// (so that light and contrast changes are not another face). `None` without landmarks or for
 /// a box under two pixels per cell.
 fn face_thumbnail(frame: &RgbImage, landmarks_px: &[[f64; 2]]) -> Option<Vec<f32>> {
@@ -107,13 +122,14 @@ fn face_thumbnail(frame: &RgbImage, landmarks_px: &[[f64; 2]]) -> Option<Vec<f32
         return None;
     }
     let (x0, y0, x1, y1) = (x0 as usize, y0 as usize, x1 as usize, y1 as usize);
+    let step = sampling_step((x1 - x0).max(y1 - y0), FACE_SAMPLING_SIDE);
     let mut sums = [0u64; FACE_THUMB * FACE_THUMB];
     let mut counts = [0u32; FACE_THUMB * FACE_THUMB];
     let raw = frame.as_raw();
     let stride = frame.width() as usize * 3;
-    for y in (y0..y1).step_by(2) {
+    for y in (y0..y1).step_by(step) {
         let cy = (y - y0) * FACE_THUMB / (y1 - y0);
-        for x in (x0..x1).step_by(2) {
+        for x in (x0..x1).step_by(step) {
             let cell = cy * FACE_THUMB + (x - x0) * FACE_THUMB / (x1 - x0);
             let p = &raw[y * stride + x * 3..y * stride + x * 3 + 3];
             sums[cell] +=
@@ -155,34 +171,36 @@ pub fn face_jumped(previous: &[[f64; 2]], current: &[[f64; 2]]) -> bool {
 }
 
 /// Mean grey level (0–1, Rec. 601 weights) of each of 32 × 32 cells, from every second pixel
-/// of every second row, less the mean of the cells.
+/// of every second row (sparser in a frame over [`PICTURE_SAMPLING_SIDE`]: [`sampling_step`]),
+/// less the mean of the cells.
 fn thumbnail(frame: &RgbImage, out: &mut Vec<f32>) {
     let (w, h) = (frame.width() as usize, frame.height() as usize);
+    let step = sampling_step(w.max(h), PICTURE_SAMPLING_SIDE);
     // Integer sums of 299·R + 587·G + 114·B per cell (exact; a 16384² frame's largest cell sum
     // is below 2^40), a division only per cell.
     let mut sums = [0u64; THUMB * THUMB];
     let mut counts = [0u32; THUMB * THUMB];
     // The sampled columns of each cell, as runs, so that the inner loop has no division.
     let mut runs: Vec<(usize, usize, usize)> = Vec::with_capacity(THUMB);
-    for x in (0..w).step_by(2) {
+    for x in (0..w).step_by(step) {
         let cx = x * THUMB / w;
         match runs.last_mut() {
-            Some((c, _, end)) if *c == cx => *end = (x + 2).min(w),
-            _ => runs.push((cx, x, (x + 2).min(w))),
+            Some((c, _, end)) if *c == cx => *end = (x + step).min(w),
+            _ => runs.push((cx, x, (x + step).min(w))),
         }
     }
     let raw = frame.as_raw();
-    for y in (0..h).step_by(2) {
+    for y in (0..h).step_by(step) {
         let cy = y * THUMB / h;
         let row = &raw[y * w * 3..(y + 1) * w * 3];
         for &(cx, x0, x1) in &runs {
             let cell = cy * THUMB + cx;
             let sum: u32 = row[x0 * 3..x1 * 3]
-                .chunks(6)
+                .chunks(3 * step)
                 .map(|p| 299 * u32::from(p[0]) + 587 * u32::from(p[1]) + 114 * u32::from(p[2]))
                 .sum();
             sums[cell] += u64::from(sum);
-            counts[cell] += (x1 - x0).div_ceil(2) as u32;
+            counts[cell] += (x1 - x0).div_ceil(step) as u32;
         }
     }
     out.clear();
@@ -232,10 +250,19 @@ mod tests {
     }
 
     /// The thumbnail is the definition: each cell's mean grey of every second pixel of every
-    /// second row (computed here pixel by pixel in f64), less the cells' mean.
+    /// second row — every fourth beyond 1920 pixels, … — (computed here pixel by pixel in f64),
+    /// less the cells' mean.
     #[test]
     fn the_thumbnail_is_the_mean_grey_of_every_second_pixel() {
-        for (w, h) in [(64, 48), (37, 29), (1280, 720), (33, 3)] {
+        for (w, h) in [
+            (64, 48),
+            (37, 29),
+            (1280, 720),
+            (33, 3),
+            (2160, 3840),
+            (3001, 7),
+        ] {
+            let step = sampling_step(w.max(h) as usize, PICTURE_SAMPLING_SIDE);
             let frame = RgbImage::from_fn(w, h, |x, y| {
                 image::Rgb([(x * 7 + y) as u8, (y * 13) as u8, (x ^ y) as u8])
             });
@@ -243,8 +270,8 @@ mod tests {
             let mut expected = vec![0.0f64; THUMB * THUMB];
             let mut counts = vec![0u32; THUMB * THUMB];
             let raw = frame.as_raw();
-            for y in (0..h).step_by(2) {
-                for x in (0..w).step_by(2) {
+            for y in (0..h).step_by(step) {
+                for x in (0..w).step_by(step) {
                     let cell = (y * THUMB / h) * THUMB + x * THUMB / w;
                     let p = &raw[(y * w + x) * 3..];
                     expected[cell] +=
@@ -266,6 +293,48 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Frames up to 1920 pixels (the shared clips among them) are sampled as they always were;
+    /// a 4K frame at every fourth pixel, and its thumbnail stays within a small fraction of the
+    /// cut threshold of the every-second-pixel one.
+    #[test]
+    fn a_4k_frame_is_sampled_more_sparsely_and_reads_the_same() {
+        assert_eq!(sampling_step(480, PICTURE_SAMPLING_SIDE), 2);
+        assert_eq!(sampling_step(1280, PICTURE_SAMPLING_SIDE), 2);
+        assert_eq!(sampling_step(1920, PICTURE_SAMPLING_SIDE), 2);
+        assert_eq!(sampling_step(3840, PICTURE_SAMPLING_SIDE), 4);
+        assert_eq!(sampling_step(1024, FACE_SAMPLING_SIDE), 2);
+        assert_eq!(sampling_step(1500, FACE_SAMPLING_SIDE), 4);
+        let frame = RgbImage::from_fn(2160, 3840, |x, y| {
+            let v = 128.0 + 60.0 * ((x as f64 / 97.0).sin() + (y as f64 / 131.0).cos());
+            image::Rgb([v as u8, (v * 0.8) as u8, (255.0 - v) as u8])
+        });
+        let mut sparse = Vec::new();
+        thumbnail(&frame, &mut sparse);
+        let (w, h) = (2160, 3840);
+        let mut dense = vec![0.0f64; THUMB * THUMB];
+        let mut counts = vec![0u32; THUMB * THUMB];
+        for y in (0..h).step_by(2) {
+            for x in (0..w).step_by(2) {
+                let p = frame.get_pixel(x as u32, y as u32).0;
+                dense[(y * THUMB / h) * THUMB + x * THUMB / w] +=
+                    (0.299 * p[0] as f64 + 0.587 * p[1] as f64 + 0.114 * p[2] as f64) / 255.0;
+                counts[(y * THUMB / h) * THUMB + x * THUMB / w] += 1;
+            }
+        }
+        dense
+            .iter_mut()
+            .zip(&counts)
+            .for_each(|(v, &n)| *v /= n as f64);
+        let mean = dense.iter().sum::<f64>() / dense.len() as f64;
+        let change = sparse
+            .iter()
+            .zip(&dense)
+            .map(|(a, b)| (*a as f64 - (b - mean)).abs())
+            .sum::<f64>()
+            / dense.len() as f64;
+        assert!(change < 0.05 * CUT_PICTURE_CHANGE, "{change}");
     }
 
     #[test]
