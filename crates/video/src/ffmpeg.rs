@@ -351,20 +351,16 @@ impl Iterator for VideoReader {
             return None;
         }
         let (w, h) = (self.info.width, self.info.height);
-        let mut buf = vec![0u8; w as usize * h as usize * 3];
-        let mut filled = 0;
+        let len = w as usize * h as usize * 3;
+        // The pipe's bytes go straight into the frame's allocation, which is never zero-filled
+        // first (a 4K frame is 25 MB). A read error ends the frame like an early end of the
+        // stream; `finish` then reports what FFmpeg said.
+        let mut buf = Vec::with_capacity(len);
         if let Some(out) = self.stdout.as_mut() {
-            while filled < buf.len() {
-                match out.read(&mut buf[filled..]) {
-                    Ok(0) => break,
-                    Ok(n) => filled += n,
-                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-                    Err(_) => break,
-                }
-            }
+            let _ = out.by_ref().take(len as u64).read_to_end(&mut buf);
         }
-        if filled < buf.len() {
-            return self.finish(filled > 0).map(Err);
+        if buf.len() < len {
+            return self.finish(!buf.is_empty()).map(Err);
         }
         let image = RgbImage::from_raw(w, h, buf)?;
         let frame = Frame {

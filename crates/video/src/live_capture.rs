@@ -296,10 +296,11 @@ fn read_frames(
     let bytes = width as usize * height as usize * 3;
     let mut index = 0;
     let ended = loop {
-        let mut buffer = vec![0u8; bytes];
-        match stdout.read_exact(&mut buffer) {
-            Ok(()) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => break Ok(()),
+        // Straight into the frame's allocation, without zero-filling it first.
+        let mut buffer = Vec::with_capacity(bytes);
+        match stdout.by_ref().take(bytes as u64).read_to_end(&mut buffer) {
+            Ok(n) if n == bytes => {}
+            Ok(_) => break Ok(()),
             Err(e) => break Err(e.to_string()),
         }
         let captured_at = Instant::now();
@@ -320,8 +321,8 @@ fn read_frames(
         slot.last_at = Some(captured_at);
         ready.notify_one();
     };
-    // A stream that ends part-way through a frame is cut off (`read_exact` gives
-    // `UnexpectedEof` then too, and FFmpeg's exit status tells the rest).
+    // A stream that ends part-way through a frame is cut off (the short frame is dropped, and
+    // FFmpeg's exit status tells the rest).
     let mut slot = lock.lock().unwrap_or_else(|e| e.into_inner());
     slot.ended = Some(ended);
     ready.notify_all();
