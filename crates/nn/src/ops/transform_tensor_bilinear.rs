@@ -54,11 +54,22 @@ pub fn transform_tensor_bilinear(
         let (col, row) = (fx as isize, fy as isize);
         let (q11, q21) = (read(row, col), read(row, col + 1));
         let (q12, q22) = (read(row + 1, col), read(row + 1, col + 1));
-        for (k, o) in out.iter_mut().enumerate() {
-            let at = |q: Option<&[f32]>| q.map_or(0.0, |q| q[k]);
-            let upper = (1.0 - right) * at(q11) + right * at(q21);
-            let below = (1.0 - right) * at(q12) + right * at(q22);
-            *o = lower * below + (1.0 - lower) * upper;
+        let mix = |q11: f32, q21: f32, q12: f32, q22: f32| {
+            let upper = (1.0 - right) * q11 + right * q21;
+            let below = (1.0 - right) * q12 + right * q22;
+            lower * below + (1.0 - lower) * upper
+        };
+        if let (Some(q11), Some(q21), Some(q12), Some(q22)) = (q11, q21, q12, q22) {
+            // Inside: four whole channel rows, a loop the compiler vectorises.
+            for ((((o, &a), &b), &c), &d) in out.iter_mut().zip(q11).zip(q21).zip(q12).zip(q22) {
+                *o = mix(a, b, c, d);
+            }
+        } else {
+            // On the last row or column: the neighbours past it read 0 (with weight 0).
+            let at = |q: Option<&[f32]>, k: usize| q.map_or(0.0, |q| q[k]);
+            for (k, o) in out.iter_mut().enumerate() {
+                *o = mix(at(q11, k), at(q21, k), at(q12, k), at(q22, k));
+            }
         }
     }
 }
