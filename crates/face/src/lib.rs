@@ -4,8 +4,9 @@
 //! that turns 468 landmarks into a metric mesh.
 //!
 //! Layers: [`model_files`] (verified `.tflite` files) → the inference engine of `visage-nn`
-//! ([`Network`](visage_nn::Network)) → networks ([`detector`], [`landmarker`], [`iris`]) →
-//! [`tracker`] → [`face_geometry`].
+//! ([`Network`](visage_nn::Network)) → networks ([`detector`], [`landmarker`], [`iris`], and
+//! the attention face mesh [`attention_network`], not yet in the pipeline) → [`tracker`] →
+//! [`face_geometry`].
 
 #![forbid(unsafe_code)]
 
@@ -57,6 +58,9 @@ pub mod iris_network;
 pub use eye_crop::{Eye, EyeCrop};
 pub use iris::{EyeLandmarks, Eyes, IrisLandmarker};
 pub use iris_network::{CropEye, IrisNetwork, IRIS_INPUT, NUM_EYE_CONTOUR, NUM_IRIS_POINTS};
+pub mod attention_network;
+
+pub use attention_network::{AttentionLandmarks, AttentionNetwork, NUM_REFINED_LANDMARKS};
 pub mod canonical_mesh;
 pub mod face_geometry;
 

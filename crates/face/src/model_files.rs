@@ -7,8 +7,9 @@
 //!   files give the same outputs as those of the `mediapipe==0.10.21` wheel that produced
 //!   `shared/reference/facemesh`.
 //! - the PyPI wheel `mediapipe==0.10.21` ([`WHEEL_FILE`], downloaded with `pip download`, opened
-//!   with Python's `zipfile`): the iris network `iris_landmark.tflite` and the full-range face
-//!   detector `face_detection_full_range_sparse.tflite`, which the npm package lacks.
+//!   with Python's `zipfile`): the iris network `iris_landmark.tflite`, the full-range face
+//!   detector `face_detection_full_range_sparse.tflite` and the attention face mesh
+//!   `face_landmark_with_attention.tflite`, which the npm package lacks.
 //!
 //! Every archive and every extracted file is checked against a pinned SHA-256; nothing downloads
 //! at run time.
@@ -33,7 +34,8 @@ pub const MODELS_ENV: &str = "VISAGE_MODELS";
 /// Model directory name, relative to the working directory (see [`models_dir`]).
 pub const DEFAULT_MODELS_DIR: &str = "models";
 
-/// The PyPI distribution the iris network and the full-range detector come from.
+/// The PyPI distribution the iris network, the full-range detector and the attention face mesh
+/// come from.
 pub const PYPI_PACKAGE: &str = "mediapipe";
 /// The pinned wheel version.
 pub const PYPI_VERSION: &str = "0.10.21";
@@ -75,10 +77,12 @@ Copyright Google LLC, licensed under the Apache License, Version 2.0 \
 (https://www.apache.org/licenses/LICENSE-2.0). face_landmark.tflite, \
 face_detection_short_range.tflite and geometry_pipeline_metadata_landmarks.binarypb are \
 extracted from the npm package @mediapipe/face_mesh version 0.4.1657299874; \
-iris_landmark.tflite and face_detection_full_range_sparse.tflite are extracted from the PyPI \
-wheel mediapipe==0.10.21 (mediapipe-0.10.21-cp311-cp311-manylinux_2_28_x86_64.whl, \
-mediapipe/modules/iris_landmark/iris_landmark.tflite and \
-mediapipe/modules/face_detection/face_detection_full_range_sparse.tflite). \
+iris_landmark.tflite, face_detection_full_range_sparse.tflite and \
+face_landmark_with_attention.tflite are extracted from the PyPI wheel mediapipe==0.10.21 \
+(mediapipe-0.10.21-cp311-cp311-manylinux_2_28_x86_64.whl, \
+mediapipe/modules/iris_landmark/iris_landmark.tflite, \
+mediapipe/modules/face_detection/face_detection_full_range_sparse.tflite and \
+mediapipe/modules/face_landmark/face_landmark_with_attention.tflite). \
 They are distributed on an \"AS IS\" BASIS, WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND. \
 visage reads them unmodified; run `visage models fetch` to recreate them.\n";
 
@@ -91,7 +95,7 @@ pub enum ModelSource {
     PypiWheel,
 }
 
-/// One of the five pinned files.
+/// One of the six pinned files.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ModelFile {
     /// `face_landmark.tflite`: 192×192 RGB → 468 landmarks + presence (FaceMesh, no attention).
@@ -107,22 +111,30 @@ pub enum ModelFile {
     /// full-range face detector, small and distant faces). Optional at run time
     /// ([`crate::FaceDetector::load_full_range_if_present`]).
     FaceDetectionFullRange,
+    /// `face_landmark_with_attention.tflite`: 192×192 RGB → 468 landmarks, the lips, both eyes'
+    /// contours and irises refined by attention, and presence (the network behind MediaPipe's
+    /// `refine_landmarks=True`). Optional at run time
+    /// ([`crate::AttentionNetwork::load_if_present`]).
+    FaceLandmarkWithAttention,
 }
 
 impl ModelFile {
     /// All pinned files.
-    pub const ALL: [ModelFile; 5] = [
+    pub const ALL: [ModelFile; 6] = [
         ModelFile::FaceLandmark,
         ModelFile::FaceDetectionShortRange,
         ModelFile::GeometryPipelineMetadata,
         ModelFile::IrisLandmark,
         ModelFile::FaceDetectionFullRange,
+        ModelFile::FaceLandmarkWithAttention,
     ];
 
     /// Where the file is fetched from.
     pub fn source(self) -> ModelSource {
         match self {
-            ModelFile::IrisLandmark | ModelFile::FaceDetectionFullRange => ModelSource::PypiWheel,
+            ModelFile::IrisLandmark
+            | ModelFile::FaceDetectionFullRange
+            | ModelFile::FaceLandmarkWithAttention => ModelSource::PypiWheel,
             _ => ModelSource::Npm,
         }
     }
@@ -133,6 +145,9 @@ impl ModelFile {
             ModelFile::IrisLandmark => Some("mediapipe/modules/iris_landmark/iris_landmark.tflite"),
             ModelFile::FaceDetectionFullRange => {
                 Some("mediapipe/modules/face_detection/face_detection_full_range_sparse.tflite")
+            }
+            ModelFile::FaceLandmarkWithAttention => {
+                Some("mediapipe/modules/face_landmark/face_landmark_with_attention.tflite")
             }
             _ => None,
         }
@@ -146,6 +161,7 @@ impl ModelFile {
             ModelFile::GeometryPipelineMetadata => "geometry_pipeline_metadata_landmarks.binarypb",
             ModelFile::IrisLandmark => "iris_landmark.tflite",
             ModelFile::FaceDetectionFullRange => "face_detection_full_range_sparse.tflite",
+            ModelFile::FaceLandmarkWithAttention => "face_landmark_with_attention.tflite",
         }
     }
 
@@ -166,6 +182,9 @@ impl ModelFile {
             }
             ModelFile::FaceDetectionFullRange => {
                 "2c3728e6da56f21e21a320433396fb06d40d9088f2247c05e5635a688d45dfe1"
+            }
+            ModelFile::FaceLandmarkWithAttention => {
+                "e06a804e0144f9929eda782122916b35d60c697c3c9344013ca2bbe76a6ce2b4"
             }
         }
     }
@@ -358,9 +377,9 @@ pub fn extract_from_tarball(tarball: &Path, dir: &Path) -> Result<Vec<PathBuf>, 
 }
 
 /// Downloads [`WHEEL_FILE`] with `python3 -m pip download` (pinned version, platform and Python
-/// tag, no dependencies) into a temporary folder inside `dir` and extracts the iris network and
-/// the full-range detector from it (see [`extract_from_wheel`]). Needs Python 3 with pip and
-/// access to PyPI. Returns the paths written.
+/// tag, no dependencies) into a temporary folder inside `dir` and extracts the iris network, the
+/// full-range detector and the attention face mesh from it (see [`extract_from_wheel`]). Needs
+/// Python 3 with pip and access to PyPI. Returns the paths written.
 pub fn fetch_with_pip(dir: &Path) -> Result<Vec<PathBuf>, FaceError> {
     let io = |path: &Path| {
         let path = path.to_owned();
@@ -397,7 +416,8 @@ pub fn fetch_with_pip(dir: &Path) -> Result<Vec<PathBuf>, FaceError> {
 }
 
 /// Extracts the wheel's pinned files (`iris_landmark.tflite`,
-/// `face_detection_full_range_sparse.tflite`) from [`WHEEL_FILE`]: checks the wheel's SHA-256,
+/// `face_detection_full_range_sparse.tflite`, `face_landmark_with_attention.tflite`) from
+/// [`WHEEL_FILE`]: checks the wheel's SHA-256,
 /// reads each member ([`ModelFile::wheel_member`]) with Python's `zipfile` (a wheel is a zip
 /// archive), verifies every file's SHA-256 before writing any, then writes them (atomically)
 /// with the `NOTICE`.
@@ -536,11 +556,9 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains(WHEEL_FILE) && err.contains("sha256"), "{err}");
-        assert!(!dir.path().join("iris_landmark.tflite").exists());
-        assert!(!dir
-            .path()
-            .join("face_detection_full_range_sparse.tflite")
-            .exists());
+        for file in ModelFile::ALL.iter().filter(|f| f.wheel_member().is_some()) {
+            assert!(!dir.path().join(file.file_name()).exists(), "{file:?}");
+        }
     }
 
     #[test]
@@ -553,6 +571,10 @@ mod tests {
         assert_eq!(ModelFile::IrisLandmark.source(), ModelSource::PypiWheel);
         assert_eq!(
             ModelFile::FaceDetectionFullRange.source(),
+            ModelSource::PypiWheel
+        );
+        assert_eq!(
+            ModelFile::FaceLandmarkWithAttention.source(),
             ModelSource::PypiWheel
         );
         for (i, a) in ModelFile::ALL.iter().enumerate() {

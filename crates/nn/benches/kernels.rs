@@ -59,6 +59,7 @@ fn one_conv(
                 stride: [stride, stride],
                 ..OpOptions::default()
             },
+            custom: None,
         }],
         inputs: vec![0],
         outputs: vec![3],

@@ -1,12 +1,14 @@
 //! A small CPU inference engine for TFLite convolutional networks, in pure Rust: it runs
-//! MediaPipe's face detectors (BlazeFace short range, full range), FaceMesh landmark network and
-//! iris network (used by `visage-face`) from the original `.tflite` files, without TensorFlow,
-//! tract or a C library.
+//! MediaPipe's face detectors (BlazeFace short range, full range), FaceMesh landmark networks
+//! (with and without attention) and iris network (used by `visage-face`) from the original
+//! `.tflite` files, without TensorFlow, tract or a C library.
 //!
 //! # What it runs
-//! One subgraph with one float32 input, batch 1, NHWC tensors; activations are float32, constant
-//! tensors float32, float16 (dense, or sparse behind `DENSIFY`) or int32 (pad amounts, sizes).
-//! The operators are those of MediaPipe's face networks:
+//! One subgraph with one float32 input, batch 1, NHWC image tensors (and, between MediaPipe's
+//! custom operators, landmarks `[1, N, D]` and 4×4 matrices `[1, 4, 4]`), any number of
+//! outputs; activations are float32, constant tensors float32, float16 (dense, or sparse behind
+//! `DENSIFY`) or int32 (pad amounts, sizes, slice bounds). The operators are those of
+//! MediaPipe's face networks:
 //!
 //! | TFLite operator | kernel |
 //! |---|---|
@@ -15,19 +17,28 @@
 //! | `MAX_POOL_2D` | [`ops::max_pool2d`] (like `ADD` and `PRELU`, compiled apart for AVX2: [`ops::separately`]) |
 //! | `PAD` | [`ops::pad4`] (constant int32 paddings) |
 //! | `ADD` | [`ops::add`] (same shapes, no broadcasting; optional fused `RELU`) |
+//! | `MUL` | [`ops::mul`] (same shapes, or by a constant of one value; no fused activation) |
 //! | `PRELU` / `RELU` | [`ops::prelu`] (one slope per channel) / [`ops::relu`]; an `ADD` whose sum only the next `PRELU` reads runs as one pass ([`ops::add_prelu`]) |
 //! | `RESIZE_BILINEAR` | [`ops::resize_bilinear`] (constant size; `half_pixel_centers` or `align_corners`, TensorFlow's sampling) |
 //! | `DEPTH_TO_SPACE` | [`ops::depth_to_space`] (TensorFlow's DCR order) |
 //! | `RESHAPE`, `CONCATENATION` | copies |
+//! | `STRIDED_SLICE` | [`ops::strided_slice`] (rank ≤ 4, constant bounds and strides, negative ones too; begin, end and shrink masks, `offset`; no ellipsis or new axis) |
+//! | `Landmarks2TransformMatrix` (custom, v2) | [`ops::landmarks_to_transform_matrix`]: landmarks `[1, N, 3]` → the 4×4 matrix of a rotated crop around some of them |
+//! | `TransformTensorBilinear` (custom, v2) | [`ops::transform_tensor_bilinear`]: a bilinear crop of an NHWC tensor through that matrix (pixel centres, zeros outside) |
+//! | `TransformLandmarks` (custom, v2) | [`ops::transform_landmarks`]: points `[1, N, 2 or 3]` mapped by the matrix |
 //! | `DEQUANTIZE`, `DENSIFY` | folded at load time (below) |
 //!
 //! Convolutions and pooling follow TensorFlow's `SAME`/`VALID` padding ([`ops::Window`]); fused
-//! activations other than `RELU` on `CONV_2D` and `ADD`, dilation and broadcasting adds are
-//! rejected when the graph is compiled, with a [`NnError`] naming the operator.
+//! activations other than `RELU` on `CONV_2D` and `ADD`, dilation, broadcasting adds and the
+//! other broadcasts of `MUL` are rejected when the graph is compiled, with a [`NnError`] naming
+//! the operator. The custom operators are MediaPipe's (its `util/tflite/operations`), read by
+//! their `custom_code` and version (version 1 of each is rejected); their options are
+//! FlexBuffer maps, read by a small bounds-checked reader of our own and checked key by key.
 //!
 //! # Pipeline
 //! - [`tflite`] reads the flatbuffer by hand, bounds-checked: a corrupt or truncated file is an
-//!   error, never a panic.
+//!   error, never a panic; so does `flexbuffer` the custom operators' options
+//!   (`custom_options`: [`tflite::CustomOptions`]).
 //! - [`Network::compile`] expands sparse constants ([`sparse`], TFLite's CSR format, the
 //!   full-range detector's kernels) and folds float16 constants behind `DEQUANTIZE` to f32 once
 //!   ([`float16`], exact conversion), re-lays out convolution weights as
@@ -69,7 +80,9 @@
 #![deny(unsafe_op_in_unsafe_fn, clippy::undocumented_unsafe_blocks)]
 
 pub mod bilinear;
+mod custom_options;
 mod error;
+mod flexbuffer;
 pub mod float16;
 pub mod network;
 pub mod ops;

@@ -1,6 +1,7 @@
 //! A bounds-checked reader for the TFLite flatbuffer format (`schema.fbs` of TensorFlow Lite),
 //! limited to the fields and operators the engine implements (those of MediaPipe's face
-//! networks).
+//! networks, and the custom operators of its attention face mesh, whose FlexBuffer options
+//! become [`CustomOptions`]).
 //!
 //! Why by hand: the generated readers of the `flatbuffers` crate would add a build step and a
 //! 5 000-line schema for the ten fields we read; every read here checks its bounds and turns a
@@ -13,6 +14,8 @@
 
 use std::cell::Cell;
 
+use crate::custom_options;
+use crate::ops::{LandmarksToTransformMatrix, SliceMasks};
 use crate::sparse::{DimFormat, Sparsity};
 use crate::NnError;
 
@@ -40,7 +43,9 @@ pub struct Tensor {
     pub sparsity: Option<Sparsity>,
 }
 
-/// The built-in operators the engine implements (`BuiltinOperator` codes in the schema).
+/// The operators the engine implements: built-in ones (`BuiltinOperator` codes in the schema)
+/// and MediaPipe's custom ones of the attention face mesh (`CUSTOM` with a `custom_code`,
+/// version 2 only: version 1 of each takes other shapes and options).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OpCode {
     Add,
@@ -51,11 +56,19 @@ pub enum OpCode {
     DepthwiseConv2d,
     Dequantize,
     MaxPool2d,
+    Mul,
     Relu,
     Reshape,
     ResizeBilinear,
     Pad,
     Prelu,
+    StridedSlice,
+    /// Custom `Landmarks2TransformMatrix` (version 2).
+    Landmarks2TransformMatrix,
+    /// Custom `TransformTensorBilinear` (version 2).
+    TransformTensorBilinear,
+    /// Custom `TransformLandmarks` (version 2).
+    TransformLandmarks,
 }
 
 impl OpCode {
@@ -68,16 +81,37 @@ impl OpCode {
             5 => OpCode::DepthToSpace,
             6 => OpCode::Dequantize,
             17 => OpCode::MaxPool2d,
+            18 => OpCode::Mul,
             19 => OpCode::Relu,
             22 => OpCode::Reshape,
             23 => OpCode::ResizeBilinear,
             34 => OpCode::Pad,
+            45 => OpCode::StridedSlice,
             54 => OpCode::Prelu,
             124 => OpCode::Densify,
             _ => return None,
         })
     }
+
+    /// The custom operator `name` of `version`, or why the engine does not run it.
+    fn from_custom(name: &str, version: i32) -> Result<OpCode, String> {
+        let code = match name {
+            "Landmarks2TransformMatrix" => OpCode::Landmarks2TransformMatrix,
+            "TransformTensorBilinear" => OpCode::TransformTensorBilinear,
+            "TransformLandmarks" => OpCode::TransformLandmarks,
+            _ => return Err(format!("custom operator {name:?} is not implemented")),
+        };
+        if version != 2 {
+            return Err(format!(
+                "custom operator {name} version {version} is not implemented (version 2 only)"
+            ));
+        }
+        Ok(code)
+    }
 }
+
+/// `BuiltinOperator_CUSTOM`: the operator is named by its `custom_code`.
+const BUILTIN_CUSTOM: i32 = 32;
 
 /// `SAME` or `VALID` padding of convolutions and pooling (TensorFlow semantics).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -104,6 +138,8 @@ pub struct OpOptions {
     pub align_corners: bool,
     /// `RESIZE_BILINEAR`: `half_pixel_centers`.
     pub half_pixel_centers: bool,
+    /// `STRIDED_SLICE`: its masks and `offset`.
+    pub slice: SliceMasks,
 }
 
 impl Default for OpOptions {
@@ -119,17 +155,30 @@ impl Default for OpOptions {
             block_size: 1,
             align_corners: false,
             half_pixel_centers: false,
+            slice: SliceMasks::default(),
         }
     }
 }
 
-/// One operator: code, input and output tensor indices (`-1` = optional input absent), options.
+/// The options of a custom operator, read from its FlexBuffer (`custom_options`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum CustomOptions {
+    /// `Landmarks2TransformMatrix`'s.
+    LandmarksToTransformMatrix(LandmarksToTransformMatrix),
+    /// `TransformTensorBilinear`'s: the crop's `[output_height, output_width]`.
+    TransformTensorBilinear { output_size: [usize; 2] },
+}
+
+/// One operator: code, input and output tensor indices (`-1` = optional input absent), options
+/// (built-in operators' in `options`, custom operators' in `custom`; `TransformLandmarks` has
+/// none).
 #[derive(Clone, Debug)]
 pub struct Operator {
     pub code: OpCode,
     pub inputs: Vec<i32>,
     pub outputs: Vec<usize>,
     pub options: OpOptions,
+    pub custom: Option<CustomOptions>,
 }
 
 /// The first subgraph of a TFLite model, with its constant buffers.
@@ -310,11 +359,17 @@ impl TfliteModel {
         }
         let root = fb.deref(0)?;
         // Model: version 0, operator_codes 1, subgraphs 2, description 3, buffers 4.
+        // OperatorCode: deprecated_builtin_code 0, custom_code 1, version 2, builtin_code 3.
         let mut codes = Vec::new();
         for oc in fb.tables(root, 1)? {
             let deprecated = fb.scalar_i8(oc, 0, 0)? as i32;
             let builtin = fb.scalar_i32(oc, 3, 0)?;
-            codes.push(deprecated.max(builtin));
+            let code = match deprecated.max(builtin) {
+                BUILTIN_CUSTOM => OpCode::from_custom(&fb.string(oc, 1)?, fb.scalar_i32(oc, 2, 1)?),
+                builtin => OpCode::from_builtin(builtin)
+                    .ok_or_else(|| format!("builtin operator {builtin} is not implemented")),
+            };
+            codes.push(code);
         }
         let mut buffers = Vec::new();
         for b in fb.tables(root, 4)? {
@@ -375,21 +430,22 @@ impl TfliteModel {
             .into_iter()
             .map(check_tensor)
             .collect::<Result<_, _>>()?;
+        // Operator: opcode_index 0, inputs 1, outputs 2, builtin_options 4 (its type is 3),
+        // custom_options 5, custom_options_format 6.
         let mut operators = Vec::new();
-        for op in fb.tables(sg, 3)? {
+        for (k, op) in fb.tables(sg, 3)?.into_iter().enumerate() {
             let idx = fb.scalar_i32(op, 0, 0)?;
-            let builtin = usize::try_from(idx)
+            let code = usize::try_from(idx)
                 .ok()
                 .and_then(|i| codes.get(i))
-                .copied()
                 .ok_or_else(|| {
                     fb.err(format!(
                         "operator code index {idx} outside 0..{}",
                         codes.len()
                     ))
-                })?;
-            let code = OpCode::from_builtin(builtin)
-                .ok_or_else(|| fb.err(format!("builtin operator {builtin} is not implemented")))?;
+                })?
+                .clone()
+                .map_err(|reason| fb.err(reason))?;
             let op_inputs = fb.i32_vector(op, 1)?;
             for &i in &op_inputs {
                 if i >= 0 {
@@ -405,11 +461,13 @@ impl TfliteModel {
                 Some(o) => read_options(&fb, code, o)?,
                 None => OpOptions::default(),
             };
+            let custom = read_custom_options(&fb, k, code, op)?;
             operators.push(Operator {
                 code,
                 inputs: op_inputs,
                 outputs: op_outputs,
                 options,
+                custom,
             });
         }
         Ok(TfliteModel {
@@ -478,7 +536,19 @@ fn read_options(fb: &Fb, code: OpCode, o: usize) -> Result<OpOptions, NnError> {
             ];
             opt.activation = fb.scalar_i8(o, 5, 0)?;
         }
-        OpCode::Add => opt.activation = fb.scalar_i8(o, 0, 0)?,
+        OpCode::Add | OpCode::Mul => opt.activation = fb.scalar_i8(o, 0, 0)?,
+        OpCode::StridedSlice => {
+            let mask =
+                |index: usize| -> Result<u32, NnError> { Ok(fb.scalar_i32(o, index, 0)? as u32) };
+            opt.slice = SliceMasks {
+                begin: mask(0)?,
+                end: mask(1)?,
+                ellipsis: mask(2)?,
+                new_axis: mask(3)?,
+                shrink_axis: mask(4)?,
+                offset: fb.scalar_i8(o, 5, 0)? != 0,
+            };
+        }
         OpCode::Concatenation => {
             opt.axis = fb.scalar_i32(o, 0, 0)?;
             opt.activation = fb.scalar_i8(o, 1, 0)?;
@@ -494,6 +564,38 @@ fn read_options(fb: &Fb, code: OpCode, o: usize) -> Result<OpOptions, NnError> {
         _ => {}
     }
     Ok(opt)
+}
+
+/// A custom operator's options from its `custom_options` bytes (field 5) in its
+/// `custom_options_format` (field 6); `None` for built-in operators and for
+/// `TransformLandmarks`, which reads none.
+fn read_custom_options(
+    fb: &Fb,
+    k: usize,
+    code: OpCode,
+    op: usize,
+) -> Result<Option<CustomOptions>, NnError> {
+    let bytes = || -> Result<(&[u8], i8), NnError> {
+        let (start, len) = fb.vector(op, 5)?;
+        Ok((fb.bytes(start, len)?, fb.scalar_i8(op, 6, 0)?))
+    };
+    let invalid = |r: String| fb.err(format!("operator {k} ({code:?}): custom options: {r}"));
+    Ok(Some(match code {
+        OpCode::Landmarks2TransformMatrix => {
+            let (b, format) = bytes()?;
+            CustomOptions::LandmarksToTransformMatrix(
+                custom_options::landmarks_to_transform_matrix(b, format).map_err(invalid)?,
+            )
+        }
+        OpCode::TransformTensorBilinear => {
+            let (b, format) = bytes()?;
+            CustomOptions::TransformTensorBilinear {
+                output_size: custom_options::transform_tensor_bilinear(b, format)
+                    .map_err(invalid)?,
+            }
+        }
+        _ => return Ok(None),
+    }))
 }
 
 /// `SparsityParameters`: traversal_order 0, block_map 1, dim_metadata 2. Each
@@ -794,6 +896,102 @@ mod tests {
         // Every truncation fails cleanly.
         for n in 0..good.len() {
             assert!(TfliteModel::parse(&good[..n], "cut").is_err());
+        }
+    }
+
+    /// A model of one custom operator `name` of `version` from `x` (`[1, 4, 3]`) to `y`,
+    /// with `options` as its `custom_options` (FlexBuffers).
+    fn custom_model(name: &'static str, version: i32, options: &[u8]) -> Vec<u8> {
+        let tensor = |name: &'static str, shape: &[i32]| {
+            V::Table(vec![
+                Some(i32s(shape)),
+                Some(V::I8(0)),
+                Some(V::I32(0)),
+                Some(V::Str(name)),
+            ])
+        };
+        let operator = V::Table(vec![
+            Some(V::I32(0)),
+            Some(i32s(&[0])),
+            Some(i32s(&[1])),
+            None,
+            None,
+            Some(V::Scalars(options.len() as u32, options.to_vec())),
+            Some(V::I8(0)),
+        ]);
+        let subgraph = V::Table(vec![
+            Some(V::Tables(vec![
+                tensor("x", &[1, 4, 3]),
+                tensor("y", &[1, 4, 4]),
+            ])),
+            Some(i32s(&[0])),
+            Some(i32s(&[1])),
+            Some(V::Tables(vec![operator])),
+        ]);
+        let code = V::Table(vec![
+            Some(V::I8(32)),
+            Some(V::Str(name)),
+            Some(V::I32(version)),
+            Some(V::I32(32)),
+        ]);
+        build(&V::Table(vec![
+            Some(V::I32(3)),
+            Some(V::Tables(vec![code])),
+            Some(V::Tables(vec![subgraph])),
+            None,
+            Some(V::Tables(vec![V::Table(Vec::new())])),
+        ]))
+    }
+
+    #[test]
+    fn reads_custom_operators_and_their_options() {
+        // `{output_height: 16, output_width: 16}`, as in MediaPipe's attention mesh.
+        let crop =
+            b"output_height\0output_width\0\x02\x1c\x0f\x02\x01\x02\x10\x10\x04\x04\x04\x24\x01";
+        let m = TfliteModel::parse(&custom_model("TransformTensorBilinear", 2, crop), "c").unwrap();
+        assert_eq!(m.operators[0].code, OpCode::TransformTensorBilinear);
+        assert_eq!(
+            m.operators[0].custom,
+            Some(CustomOptions::TransformTensorBilinear {
+                output_size: [16, 16]
+            })
+        );
+        let m = TfliteModel::parse(&custom_model("TransformLandmarks", 2, &[]), "c").unwrap();
+        assert_eq!(
+            (m.operators[0].code, &m.operators[0].custom),
+            (OpCode::TransformLandmarks, &None)
+        );
+        let reason = |bytes: Vec<u8>| {
+            TfliteModel::parse(&bytes, "custom.tflite")
+                .unwrap_err()
+                .to_string()
+        };
+        let e = reason(custom_model("TransformTensorBilinear", 1, crop));
+        assert!(
+            e.contains("TransformTensorBilinear version 1 is not implemented"),
+            "{e}"
+        );
+        let e = reason(custom_model("MaxPoolingWithArgmax2D", 1, &[]));
+        assert!(
+            e.contains("\"MaxPoolingWithArgmax2D\" is not implemented"),
+            "{e}"
+        );
+        let e = reason(custom_model(
+            "Landmarks2TransformMatrix",
+            2,
+            b"\x00\x00\x01",
+        ));
+        assert!(
+            e.contains("custom.tflite") && e.contains("operator 0 (Landmarks2TransformMatrix)"),
+            "{e}"
+        );
+        // Any byte set to 0xff gives a model or an error, never a panic.
+        let mut bytes = custom_model("TransformTensorBilinear", 2, crop);
+        for i in 8..bytes.len() {
+            let keep = bytes[i];
+            bytes[i] = 0xff;
+            let _ = TfliteModel::parse(&bytes, "flipped");
+            bytes[i] = keep;
         }
     }
 

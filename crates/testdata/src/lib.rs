@@ -23,12 +23,13 @@
 use std::path::{Path, PathBuf};
 
 /// The model files the tests use (`visage models fetch`).
-pub const MODEL_FILES: [&str; 5] = [
+pub const MODEL_FILES: [&str; 6] = [
     "face_detection_short_range.tflite",
     "face_landmark.tflite",
     "geometry_pipeline_metadata_landmarks.binarypb",
     "iris_landmark.tflite",
     "face_detection_full_range_sparse.tflite",
+    "face_landmark_with_attention.tflite",
 ];
 
 /// The workspace root (the folder with the top-level `Cargo.toml`).

@@ -2,11 +2,11 @@
 //! over pre-allocated buffers, then run per input without allocating.
 //!
 //! Why not tract: `tract-tflite` 0.23 refuses MediaPipe's face networks (no `DEQUANTIZE`, no
-//! `PRELU`, registry not extensible). Those networks use thirteen operators, all NHWC with batch
-//! 1, so the engine expands the sparse `DENSIFY` constants and folds the float16 `DEQUANTIZE`
-//! constants to f32 at load time, re-lays out
-//! convolution weights for channel-contiguous inner loops and runs the hand-written kernels of
-//! [`crate::ops`].
+//! `PRELU`, registry not extensible, no MediaPipe custom operators). Those networks use fifteen
+//! built-in operators, all NHWC with batch 1, and the attention face mesh three custom ones, so
+//! the engine expands the sparse `DENSIFY` constants and folds the float16 `DEQUANTIZE`
+//! constants to f32 at load time, re-lays out convolution weights for channel-contiguous inner
+//! loops and runs the hand-written kernels of [`crate::ops`].
 //!
 //! # Files
 //! - `step`: the compiled plan's instruction (`Step`), one kernel call over

@@ -107,6 +107,15 @@ fn step_cost(step: &Step, len_of: &[usize]) -> (String, u64, u64) {
         Step::Pad { .. } => ("pad".into(), 0, 0),
         Step::Copy { .. } => ("copy".into(), 0, 0),
         Step::Concat { .. } => ("concat".into(), 0, 0),
+        Step::Mul { .. } => ("mul".into(), len_of[y], 0),
+        Step::MulConstant { c, .. } => ("mul".into(), len_of[y], c.len()),
+        Step::StridedSlice { .. } => ("strided-slice".into(), 0, 0),
+        // Per subset landmark: a turn (four multiplies).
+        Step::LandmarksToMatrix { op, .. } => {
+            ("landmarks-to-matrix".into(), 4 * op.subset.len(), 0)
+        }
+        Step::TransformTensor { .. } => ("transform-tensor".into(), 4 * len_of[y], 0),
+        Step::TransformLandmarks { .. } => ("transform-landmarks".into(), 2 * len_of[y], 0),
     };
     (op, macs as u64, (io + weights) as u64)
 }

@@ -172,6 +172,41 @@ impl Network {
                     with_out!(*y, |out| ops::pad4(get!(*x), *shape, *pads, out))
                 }
                 Step::Copy { x, y } => with_out!(*y, |out| out.copy_from_slice(get!(*x))),
+                Step::Mul { a, b, y } => with_out!(*y, |out| ops::mul(get!(*a), get!(*b), out)),
+                Step::MulConstant { x, y, c } => with_out!(*y, |out| ops::mul(get!(*x), c, out)),
+                Step::StridedSlice { x, y, slice } => {
+                    with_out!(*y, |out| ops::strided_slice(get!(*x), slice, out))
+                }
+                Step::LandmarksToMatrix { x, y, op } => {
+                    with_out!(*y, |out| ops::landmarks_to_transform_matrix(
+                        get!(*x),
+                        op,
+                        out
+                    ))
+                }
+                Step::TransformTensor {
+                    x,
+                    matrix,
+                    y,
+                    in_hw,
+                    c,
+                    out_hw,
+                } => with_out!(*y, |out| ops::transform_tensor_bilinear(
+                    get!(*x),
+                    *in_hw,
+                    *c,
+                    get!(*matrix),
+                    *out_hw,
+                    out
+                )),
+                Step::TransformLandmarks { x, matrix, y, dims } => {
+                    with_out!(*y, |out| ops::transform_landmarks(
+                        get!(*x),
+                        *dims,
+                        get!(*matrix),
+                        out
+                    ))
+                }
                 Step::Concat { xs, y, outer } => with_out!(*y, |out| {
                     let mut pos = 0;
                     for o in 0..*outer {

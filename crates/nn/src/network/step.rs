@@ -1,7 +1,9 @@
 //! The compiled plan's instruction: one [`Step`] per kernel call, naming the tensors it reads
 //! and writes by index (their buffers are assigned by [`super::liveness`]).
 
-use crate::ops::{Activation, Conv2dWeights, ResizeAxis, Window};
+use crate::ops::{
+    Activation, Conv2dWeights, LandmarksToTransformMatrix, ResizeAxis, StridedSlice, Window,
+};
 
 /// One compiled operator. Tensor indices refer to [`Network`](super::Network)'s value buffers.
 #[derive(Clone, Debug)]
@@ -80,6 +82,45 @@ pub(super) enum Step {
         y: usize,
         outer: usize,
     },
+    /// `MUL` of two computed tensors of one shape.
+    Mul {
+        a: usize,
+        b: usize,
+        y: usize,
+    },
+    /// `MUL` by a constant: one value for every element, or one per element.
+    MulConstant {
+        x: usize,
+        y: usize,
+        c: Vec<f32>,
+    },
+    StridedSlice {
+        x: usize,
+        y: usize,
+        slice: StridedSlice,
+    },
+    /// `Landmarks2TransformMatrix`: landmarks `[1, N, 3]` → a 4×4 matrix.
+    LandmarksToMatrix {
+        x: usize,
+        y: usize,
+        op: LandmarksToTransformMatrix,
+    },
+    /// `TransformTensorBilinear`: `x` (`[1, H, W, C]`) cropped through `matrix`.
+    TransformTensor {
+        x: usize,
+        matrix: usize,
+        y: usize,
+        in_hw: [usize; 2],
+        c: usize,
+        out_hw: [usize; 2],
+    },
+    /// `TransformLandmarks`: points `[1, N, dims]` mapped by `matrix`.
+    TransformLandmarks {
+        x: usize,
+        matrix: usize,
+        y: usize,
+        dims: usize,
+    },
 }
 
 impl Step {
@@ -94,8 +135,15 @@ impl Step {
             | Step::Pad { x, y, .. }
             | Step::Resize { x, y, .. }
             | Step::DepthToSpace { x, y, .. }
-            | Step::Copy { x, y } => (vec![*x], *y),
-            Step::Add { a, b, y, .. } | Step::AddPrelu { a, b, y, .. } => (vec![*a, *b], *y),
+            | Step::Copy { x, y }
+            | Step::MulConstant { x, y, .. }
+            | Step::StridedSlice { x, y, .. }
+            | Step::LandmarksToMatrix { x, y, .. } => (vec![*x], *y),
+            Step::Add { a, b, y, .. } | Step::AddPrelu { a, b, y, .. } | Step::Mul { a, b, y } => {
+                (vec![*a, *b], *y)
+            }
+            Step::TransformTensor { x, matrix, y, .. }
+            | Step::TransformLandmarks { x, matrix, y, .. } => (vec![*x, *matrix], *y),
             Step::Concat { xs, y, .. } => (xs.clone(), *y),
         }
     }

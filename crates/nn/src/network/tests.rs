@@ -20,6 +20,7 @@ fn op(code: OpCode, inputs: &[i32], output: usize) -> Operator {
         inputs: inputs.to_vec(),
         outputs: vec![output],
         options: OpOptions::default(),
+        custom: None,
     }
 }
 
@@ -327,4 +328,164 @@ fn a_graph_of_more_than_one_input_is_rejected() {
         e.contains("two_inputs.tflite") && e.contains("the graph has 2 inputs"),
         "{e}"
     );
+}
+
+/// The attention face mesh's operators in a graph of rank-3 tensors and three outputs: four
+/// landmarks `x` (`[1, 4, 3]`) halved by `MUL`, a crop's matrix from them
+/// (`Landmarks2TransformMatrix`), that matrix scaled element-wise by a `[1, 4, 4]` constant
+/// (`MUL`), the landmarks' `(x, y)` (`STRIDED_SLICE`) mapped by it (`TransformLandmarks`), and
+/// the landmarks read as a 2×2×3 image cropped by the first matrix
+/// (`TransformTensorBilinear`). Every value exact in f32.
+fn attention_ops_model() -> TfliteModel {
+    use crate::ops::LandmarksToTransformMatrix;
+    use crate::tflite::CustomOptions;
+    let ints = |v: &[i32]| -> Vec<u8> { v.iter().flat_map(|x| x.to_le_bytes()).collect() };
+    let mut ops = vec![
+        op(OpCode::Mul, &[0, 1], 2),
+        op(OpCode::Landmarks2TransformMatrix, &[2], 3),
+        op(OpCode::Mul, &[4, 3], 5),
+        op(OpCode::StridedSlice, &[0, 6, 7, 8], 9),
+        op(OpCode::TransformLandmarks, &[9, 5], 10),
+        op(OpCode::Reshape, &[0], 11),
+        op(OpCode::TransformTensorBilinear, &[11, 3], 12),
+    ];
+    ops[1].custom = Some(CustomOptions::LandmarksToTransformMatrix(
+        LandmarksToTransformMatrix {
+            left: 0,
+            right: 1,
+            target_rotation: 0.0,
+            output_size: [2, 2],
+            scale: [1.0, 1.0],
+            subset: vec![0, 1, 2, 3],
+        },
+    ));
+    ops[6].custom = Some(CustomOptions::TransformTensorBilinear {
+        output_size: [2, 2],
+    });
+    TfliteModel {
+        tensors: vec![
+            tensor("x", &[1, 4, 3], TensorType::Float32, 0),
+            tensor("half", &[1], TensorType::Float32, 1),
+            tensor("halved", &[1, 4, 3], TensorType::Float32, 0),
+            tensor("matrix", &[1, 4, 4], TensorType::Float32, 0),
+            tensor("to_pixels", &[1, 4, 4], TensorType::Float32, 2),
+            tensor("matrix_px", &[1, 4, 4], TensorType::Float32, 0),
+            tensor("begin", &[3], TensorType::Int32, 3),
+            tensor("end", &[3], TensorType::Int32, 4),
+            tensor("strides", &[3], TensorType::Int32, 5),
+            tensor("xy", &[1, 4, 2], TensorType::Float32, 0),
+            tensor("mapped", &[1, 4, 2], TensorType::Float32, 0),
+            tensor("image", &[1, 2, 2, 3], TensorType::Float32, 0),
+            tensor("crop", &[1, 2, 2, 3], TensorType::Float32, 0),
+        ],
+        operators: ops,
+        inputs: vec![0],
+        outputs: vec![10, 12, 3],
+        buffers: vec![
+            Vec::new(),
+            f32_bytes(&[0.5]),
+            // MediaPipe's constant: the crop's matrix in 4× its pixels.
+            f32_bytes(&[
+                1.0, 1.0, 4.0, 4.0, 1.0, 1.0, 4.0, 4.0, 0.25, 0.25, 1.0, 1.0, 0.25, 0.25, 1.0, 1.0,
+            ]),
+            ints(&[0, 0, 0]),
+            ints(&[1, 4, 2]),
+            ints(&[1, 1, 1]),
+        ],
+    }
+}
+
+#[test]
+fn runs_the_attention_operators_by_hand() {
+    let mut net = Network::compile(&attention_ops_model(), "attention").unwrap();
+    // The corners of the box [2, 6]², z = 1 … 4.
+    let x = [2.0, 2.0, 1.0, 6.0, 2.0, 2.0, 2.0, 6.0, 3.0, 6.0, 6.0, 4.0];
+    for _ in 0..2 {
+        net.input_mut().copy_from_slice(&x);
+        net.run();
+        // Halved, the box is [1, 3]², level: a 2×2 crop of it has unit scale and starts at
+        // (1, 1).
+        let matrix = [
+            1.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ];
+        assert_eq!(net.output(2), Some(("matrix", &matrix[..])));
+        // × the constant: the shift ×4, (x, y) → (x + 4, y + 4).
+        let mapped = [6.0, 6.0, 10.0, 6.0, 6.0, 10.0, 10.0, 10.0];
+        assert_eq!(net.output(0), Some(("mapped", &mapped[..])));
+        // The image's pixel (1, 1) is landmark 3; the other crop pixels fall outside.
+        let mut crop = [0.0; 12];
+        crop[..3].copy_from_slice(&[6.0, 6.0, 4.0]);
+        assert_eq!(net.output_named("crop"), Some(&crop[..]));
+    }
+    let profile = net.profile(1);
+    let ops: Vec<&str> = profile.iter().map(|p| p.op.as_str()).collect();
+    assert_eq!(
+        ops,
+        [
+            "mul",
+            "landmarks-to-matrix",
+            "mul",
+            "strided-slice",
+            "transform-landmarks",
+            "copy",
+            "transform-tensor"
+        ]
+    );
+}
+
+#[test]
+fn rejects_what_the_attention_operators_do_not_implement() {
+    use crate::tflite::CustomOptions;
+    let reason = |m: &TfliteModel| Network::compile(m, "attention").unwrap_err().to_string();
+    // MUL by a constant of three values over [1, 4, 3]: a broadcast along the last axis.
+    let mut m = attention_ops_model();
+    m.tensors[1].shape = vec![3];
+    m.buffers[1] = f32_bytes(&[0.5; 3]);
+    assert!(reason(&m).contains("broadcasting mul"), "{}", reason(&m));
+    // A slice with an ellipsis.
+    let mut m = attention_ops_model();
+    m.operators[3].options.slice.ellipsis = 1;
+    assert!(reason(&m).contains("ellipsis"), "{}", reason(&m));
+    // A slice whose shape is not the output's.
+    let mut m = attention_ops_model();
+    m.buffers[4] = [1i32, 4, 3].iter().flat_map(|v| v.to_le_bytes()).collect();
+    assert!(
+        reason(&m).contains("slice of shape [1, 4, 3]"),
+        "{}",
+        reason(&m)
+    );
+    // A landmark the input does not have.
+    let mut m = attention_ops_model();
+    if let Some(CustomOptions::LandmarksToTransformMatrix(o)) = m.operators[1].custom.as_mut() {
+        o.subset.push(7);
+    }
+    assert!(
+        reason(&m).contains("landmark 7 outside the 4"),
+        "{}",
+        reason(&m)
+    );
+    // A crop of another size than its output, and an operator without its options.
+    let mut m = attention_ops_model();
+    m.operators[6].custom = Some(CustomOptions::TransformTensorBilinear {
+        output_size: [3, 2],
+    });
+    assert!(
+        reason(&m).contains("TransformTensorBilinear"),
+        "{}",
+        reason(&m)
+    );
+    let mut m = attention_ops_model();
+    m.operators[1].custom = None;
+    assert!(reason(&m).contains("no options"), "{}", reason(&m));
+    // A matrix of the wrong shape, and mapped points of another shape than the points.
+    let mut m = attention_ops_model();
+    m.operators[4].inputs = vec![9, 2];
+    assert!(
+        reason(&m).contains("matrix halved has shape 1×4×3"),
+        "{}",
+        reason(&m)
+    );
+    let mut m = attention_ops_model();
+    m.tensors[10].shape = vec![1, 8];
+    assert!(reason(&m).contains("output shape 1×8"), "{}", reason(&m));
 }

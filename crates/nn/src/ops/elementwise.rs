@@ -62,6 +62,26 @@ fn add_relu(a: &[f32], b: &[f32], y: &mut [f32]) {
     }
 }
 
+/// Element-wise product (TFLite `MUL` without fused activation) of `a` with `b` of the same
+/// length, or with `b`'s one value broadcast over `a`.
+///
+/// # Panics
+/// If `b` has neither one value nor `a`'s length, or `y` has another length than `a`.
+#[track_caller]
+pub fn mul(a: &[f32], b: &[f32], y: &mut [f32]) {
+    assert_eq!(a.len(), y.len(), "mul sizes");
+    if let &[s] = b {
+        for (o, &u) in y.iter_mut().zip(a) {
+            *o = u * s;
+        }
+        return;
+    }
+    assert_eq!(a.len(), b.len(), "mul sizes");
+    for ((o, &u), &v) in y.iter_mut().zip(a).zip(b) {
+        *o = u * v;
+    }
+}
+
 /// `prelu(a + b, α)` in one pass (an `ADD` whose only reader is a `PRELU`): the same values
 /// as [`add`] then [`prelu`], without writing and reading the sum.
 ///
@@ -119,5 +139,14 @@ mod tests {
         prelu(&sum, &alpha, &mut two);
         add_prelu(&a, &b, &alpha, &mut y);
         assert_eq!(y.map(f32::to_bits), two.map(f32::to_bits));
+    }
+
+    #[test]
+    fn mul_by_a_scalar_or_elementwise() {
+        let mut y = [0.0; 4];
+        mul(&[1.0, -2.0, 3.0, 4.0], &[0.25], &mut y);
+        assert_eq!(y, [0.25, -0.5, 0.75, 1.0]);
+        mul(&[1.0, -2.0, 3.0, 4.0], &[2.0, 0.5, -1.0, 0.0], &mut y);
+        assert_eq!(y, [2.0, -1.0, -3.0, 0.0]);
     }
 }

@@ -1,8 +1,11 @@
-//! Hand-written NHWC kernels for the engine's operator set (that of MediaPipe's face networks).
+//! Hand-written NHWC kernels for the engine's operator set (that of MediaPipe's face networks),
+//! and those of MediaPipe's custom operators of the attention face mesh (its landmarks turned
+//! into a crop's matrix, the crop, the cropped points mapped back).
 //!
-//! All tensors have batch 1 and are stored row-major as `[H, W, C]` (channels fastest), like
-//! TFLite. Inner loops run over contiguous channels so that the compiler vectorises them.
-//! Kernels write into caller-owned outputs and never allocate.
+//! All image tensors have batch 1 and are stored row-major as `[H, W, C]` (channels fastest),
+//! like TFLite; landmarks are `[N, D]`, matrices 4×4 row-major. Inner loops run over contiguous
+//! channels so that the compiler vectorises them. Kernels write into caller-owned outputs and
+//! never allocate.
 
 #[cfg(target_arch = "x86_64")]
 mod avx512;
@@ -10,6 +13,7 @@ mod conv2d;
 mod depth_to_space;
 mod depthwise_conv2d;
 mod elementwise;
+mod landmarks_to_transform_matrix;
 mod madd;
 mod max_pool2d;
 mod pad;
@@ -17,16 +21,25 @@ mod resize_bilinear;
 #[cfg(target_arch = "x86_64")]
 mod row_sweep;
 pub mod separately;
+mod strided_slice;
+mod transform_landmarks;
+mod transform_tensor_bilinear;
 mod window;
 
 pub use conv2d::{conv2d, Conv2dWeights};
 pub use depth_to_space::depth_to_space;
 pub use depthwise_conv2d::depthwise_conv2d;
-pub use elementwise::{add, add_prelu, prelu, relu, Activation};
+pub use elementwise::{add, add_prelu, mul, prelu, relu, Activation};
+pub use landmarks_to_transform_matrix::{
+    landmarks_to_transform_matrix, LandmarksToTransformMatrix,
+};
 pub use madd::{Fused, Madd, Plain};
 pub use max_pool2d::max_pool2d;
 pub use pad::pad4;
 pub use resize_bilinear::{resize_bilinear, ResizeAxis};
+pub use strided_slice::{strided_slice, SliceMasks, StridedSlice};
+pub use transform_landmarks::transform_landmarks;
+pub use transform_tensor_bilinear::transform_tensor_bilinear;
 pub use window::Window;
 
 /// The convolution kernels this process runs: `"avx512"`, `"avx2+fma"` or `"portable"` (what

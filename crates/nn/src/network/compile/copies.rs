@@ -1,8 +1,9 @@
-//! The operators that only copy values: `RESHAPE` (same number of values) and
-//! `CONCATENATION` (along any axis).
+//! The operators that only copy values: `RESHAPE` (same number of values),
+//! `CONCATENATION` (along any axis) and `STRIDED_SLICE` (constant begin, end and strides).
 
 use super::operands::Operands;
 use crate::network::step::Step;
+use crate::ops::StridedSlice;
 use crate::NnError;
 
 /// `RESHAPE`: a copy into the output's shape, which must hold as many values.
@@ -45,4 +46,23 @@ pub(super) fn concatenation(o: &Operands) -> Result<Step, NnError> {
         return Err(o.error("concatenated sizes do not add up".into()));
     }
     Ok(Step::Concat { xs, y, outer })
+}
+
+/// `STRIDED_SLICE` of a computed tensor of rank ≤ 4 by constant int32 `begin`, `end` and
+/// `strides` with the operator's masks (no ellipsis, no new axis: [`StridedSlice::new`]); the
+/// output's shape must be the slice's.
+pub(super) fn strided_slice(o: &Operands) -> Result<Step, NnError> {
+    let (shapes, y) = (o.shapes, o.y);
+    let x = o.activation(o.input(0)?)?;
+    let ints = |j: usize, what: &str| -> Result<&Vec<i32>, NnError> {
+        o.int_constant(o.input(j)?)
+            .ok_or_else(|| o.error(format!("{what} must be a constant int32 tensor")))
+    };
+    let (begin, end, strides) = (ints(1, "begin")?, ints(2, "end")?, ints(3, "strides")?);
+    let (slice, out) = StridedSlice::new(&shapes[x], begin, end, strides, o.op.options.slice)
+        .map_err(|r| o.error(r))?;
+    if out != shapes[y] {
+        return Err(o.error(format!("slice of shape {out:?}, output {:?}", shapes[y])));
+    }
+    Ok(Step::StridedSlice { x, y, slice })
 }

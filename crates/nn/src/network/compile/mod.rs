@@ -5,8 +5,8 @@
 //! 2. `constants`: the constant tensors read (sparse ones expanded, float16 ones folded to f32).
 //! 3. Each operator, its operands resolved and checked (`operands`), compiled by its family:
 //!    `fold` (`DEQUANTIZE`, `DENSIFY`: a constant, no step), `convolution`, `elementwise`,
-//!    `spatial` (resize, depth-to-space, pooling, padding) and `copies` (reshape,
-//!    concatenation).
+//!    `spatial` (resize, depth-to-space, pooling, padding), `copies` (reshape, concatenation,
+//!    strided slice) and `landmarks` (MediaPipe's custom operators of the attention face mesh).
 //! 4. `fuse`: an `ADD` merged into the `PRELU` that alone reads it.
 //! 5. The activation buffers planned ([`super::liveness`]) and allocated.
 
@@ -16,6 +16,7 @@ mod copies;
 mod elementwise;
 mod fold;
 mod fuse;
+mod landmarks;
 mod limits;
 mod operands;
 mod spatial;
@@ -37,7 +38,8 @@ impl Network {
     /// Compiles a parsed model. `name` is used in error messages.
     ///
     /// Errors when the graph uses an operator variant the kernels do not implement (fused
-    /// activations, dilation, depth multiplier ≠ 1, broadcasting adds, non-constant weights).
+    /// activations, dilation, depth multiplier ≠ 1, broadcasting adds, broadcasts of `MUL`
+    /// other than by one value, non-constant weights, slices with an ellipsis or a new axis).
     pub fn compile(model: &TfliteModel, name: &str) -> Result<Network, NnError> {
         let n = model.tensors.len();
         check_tensor_sizes(model, name)?;
@@ -145,6 +147,11 @@ fn compile_operator(o: &Operands, budget: &Budget) -> Result<Compiled, NnError> 
         OpCode::Pad => spatial::pad(o)?,
         OpCode::Reshape => copies::reshape(o)?,
         OpCode::Concatenation => copies::concatenation(o)?,
+        OpCode::Mul => elementwise::mul(o, budget)?,
+        OpCode::StridedSlice => copies::strided_slice(o)?,
+        OpCode::Landmarks2TransformMatrix => landmarks::landmarks_to_transform_matrix(o)?,
+        OpCode::TransformTensorBilinear => landmarks::transform_tensor_bilinear(o)?,
+        OpCode::TransformLandmarks => landmarks::transform_landmarks(o)?,
     };
     Ok(Compiled::Step(step))
 }

@@ -103,6 +103,11 @@ impl<'a> Operands<'a> {
         Ok(values)
     }
 
+    /// Whether tensor `t` is a floating-point constant.
+    pub(super) fn is_constant(&self, t: usize) -> bool {
+        self.constants.floats[t].is_some()
+    }
+
     /// The values of tensor `t` if it is an int32 constant.
     pub(super) fn int_constant(&self, t: usize) -> Option<&'a Vec<i32>> {
         self.constants.ints[t].as_ref()
