@@ -104,7 +104,10 @@ if [ ! -x "$py_venv/bin/maturin" ] || ! "$py_venv/bin/python" -c "import pytest,
 fi
 rm -rf python/visage/models
 mkdir -p python/visage/models
-cp "${VISAGE_MODELS:-models}"/* python/visage/models/
+# Every model file but the attention face mesh, which the pipeline the package wraps does not run.
+for f in "${VISAGE_MODELS:-models}"/*; do
+  [ "$(basename "$f")" = face_landmark_with_attention.tflite ] || cp "$f" python/visage/models/
+done
 cp crates/morphable/data/LICENSE-ICT-FaceKit python/visage/models/
 
 [ "$mode" = ci ] && exit 0

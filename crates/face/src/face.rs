@@ -13,7 +13,8 @@ pub struct Face {
     /// Landmarks in frame pixels.
     pub landmarks: FrameLandmarks,
     /// Eye contours and irises in frame pixels (`right` = the subject's right eye, on the
-    /// image's left), when the iris network is loaded ([`crate::FaceMesh::iris`]).
+    /// image's left): the attention face mesh's, or the iris network's when it is loaded
+    /// ([`crate::FaceMesh::iris`]); `None` without either.
     pub eyes: Option<Eyes>,
 }
 

@@ -26,7 +26,8 @@ pub enum DetectorUse {
     Both,
 }
 
-/// Detector + landmarker (+ iris landmarker, optional) for still images.
+/// Detectors + landmarker (the attention face mesh, or FaceMesh's plain network with the iris
+/// network, optional) for still images.
 #[derive(Clone, Debug)]
 pub struct FaceMesh {
     /// The short-range detector (faces within about 2 m).
@@ -36,13 +37,16 @@ pub struct FaceMesh {
     /// Which detectors [`FaceMesh::process`] runs.
     pub detectors: DetectorUse,
     pub landmarker: FaceLandmarker,
-    /// The eye stage; `None` skips the eyes (every [`Face::eyes`] is then `None`).
+    /// The iris network, for a landmarker that gives no eyes of its own; `None` there skips
+    /// the eyes (every [`Face::eyes`] is then `None`).
     pub iris: Option<IrisLandmarker>,
 }
 
 impl FaceMesh {
-    /// Loads the networks (verified) from the model directory; the iris network only if its
-    /// file is there (without it faces have no eyes, everything else works).
+    /// Loads the networks (verified) from the model directory: the detectors, FaceMesh's
+    /// 468-point network (MediaPipe's `refine_landmarks=False`) and, if its file is there, the
+    /// iris network for the eyes (MediaPipe Iris on a crop of each eye; without it faces have
+    /// no eyes, everything else works). What the pipeline runs.
     pub fn load(models: &Path) -> Result<Self, FaceError> {
         Ok(FaceMesh {
             detector: FaceDetector::load(models)?,
@@ -53,12 +57,28 @@ impl FaceMesh {
         })
     }
 
-    /// The eyes of a face with these landmarks, if the iris network is loaded.
+    /// Loads the detectors and the attention face mesh, whose landmarks come with refined lips
+    /// and eyes and with both irises in one network run (MediaPipe's `refine_landmarks=True`).
+    pub fn load_attention(models: &Path) -> Result<Self, FaceError> {
+        Ok(FaceMesh {
+            detector: FaceDetector::load(models)?,
+            full_range: FaceDetector::load_full_range_if_present(models)?,
+            detectors: DetectorUse::default(),
+            landmarker: FaceLandmarker::load_attention(models)?,
+            iris: None,
+        })
+    }
+
+    /// The eyes of a face with these landmarks: those the attention face mesh gave with them,
+    /// or the iris network's when it is loaded.
     pub fn eyes(
         &mut self,
         image: &RgbImage,
         landmarks: &FrameLandmarks,
     ) -> Result<Option<Eyes>, FaceError> {
+        if let Some(eyes) = &landmarks.eyes {
+            return Ok(Some(eyes.clone()));
+        }
         self.iris
             .as_mut()
             .map(|iris| iris.eyes(image, &landmarks.points))

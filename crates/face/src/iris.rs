@@ -26,8 +26,9 @@ pub struct EyeLandmarks {
     pub iris: [[f32; 3]; NUM_IRIS_POINTS],
     /// 71 eye-contour and eyebrow points, in the network's order.
     pub contour: Vec<[f32; 3]>,
-    /// The crop the network saw.
-    pub crop: EyeCrop,
+    /// The crop the iris network saw; `None` when the eyes came with the face's landmarks
+    /// (the attention mesh, [`crate::AttentionNetwork`]).
+    pub crop: Option<EyeCrop>,
 }
 
 impl EyeLandmarks {
@@ -60,7 +61,7 @@ impl EyeLandmarks {
         EyeLandmarks {
             iris: raw.iris.map(|p| crop.to_frame(p)),
             contour: raw.contour.iter().map(|&p| crop.to_frame(p)).collect(),
-            crop,
+            crop: Some(crop),
         }
     }
 }
@@ -177,12 +178,7 @@ mod tests {
                 [10.0, 14.0, 0.0],
             ],
             contour: Vec::new(),
-            crop: EyeCrop {
-                x0: 0.0,
-                y0: 0.0,
-                scale: 1.0,
-                mirrored: false,
-            },
+            crop: None,
         };
         assert_eq!(eye.iris_center(), [10.0, 10.0, 0.0]);
         assert!((eye.iris_radius() - 3.5).abs() < 1e-6);

@@ -5,8 +5,9 @@
 //!
 //! Layers: [`model_files`] (verified `.tflite` files) → the inference engine of `visage-nn`
 //! ([`Network`](visage_nn::Network)) → networks ([`detector`], [`landmarker`], [`iris`], and
-//! the attention face mesh [`attention_network`], not yet in the pipeline) → [`tracker`] →
-//! [`face_geometry`].
+//! the attention face mesh [`attention_network`], which gives the lips, eyes and irises with the
+//! landmarks — [`FaceMesh::load_attention`]; the pipeline runs FaceMesh and the iris network,
+//! [`FaceMesh::load`]) → [`tracker`] → [`face_geometry`].
 
 #![forbid(unsafe_code)]
 

@@ -1,7 +1,8 @@
 //! Video tracking (MediaPipe `face_landmark_front_cpu` with `max_num_faces = 1`): the next
 //! frame's ROI comes from the current landmarks; the detector runs only on the first frame,
-//! when the face presence drops below the threshold, or when the face is lost. When the iris
-//! network is loaded ([`FaceMesh::iris`]) each face also gets its eyes.
+//! when the face presence drops below the threshold, or when the face is lost. Each face also
+//! gets its eyes: the attention face mesh's, or the iris network's when it is loaded
+//! ([`FaceMesh::iris`]).
 
 use image::RgbImage;
 

@@ -181,7 +181,10 @@ fn tracked_iris_centres_match_mediapipe() {
             let raw = common::read_json(dir.join(format!("iris_raw_{}.json", side(eye))));
             let to_refined = distance(ours, refined[centre_index]);
             let to_same = distance(ours, reference_center(&raw));
-            let (crop, reference_crop) = (eyes.get(eye).crop, reference_crop(&raw));
+            let (crop, reference_crop) = (
+                eyes.get(eye).crop.expect("the iris network's crop"),
+                reference_crop(&raw),
+            );
             let crop_shift = (crop.x0 - reference_crop.x0)
                 .hypot(crop.y0 - reference_crop.y0)
                 .max(64.0 * (crop.scale - reference_crop.scale).abs());

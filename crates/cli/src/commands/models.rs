@@ -19,8 +19,9 @@ pub struct ModelsArgs {
 enum ModelsAction {
     /// Download @mediapipe/face_mesh (pinned version) with `npm pack` and the PyPI wheel
     /// mediapipe==0.10.21 with `python3 -m pip download`; extract and verify the face networks,
-    /// the canonical face mesh, the iris network and the full-range face detector (sha256) into
-    /// the model directory. A source whose files are already present and verified is skipped.
+    /// the canonical face mesh, the iris network, the attention face mesh and the full-range
+    /// face detector (sha256) into the model directory. A source whose files are already
+    /// present and verified is skipped.
     Fetch {
         /// Model directory; default: $VISAGE_MODELS, else ./models.
         #[arg(long)]
