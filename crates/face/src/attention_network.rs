@@ -15,6 +15,7 @@
 
 use std::path::Path;
 
+use crate::checked_network::compile_checked;
 use crate::{FaceError, ModelFile, LANDMARK_INPUT, NUM_IRIS_POINTS, NUM_LANDMARKS};
 use visage_nn::Network;
 
@@ -183,31 +184,12 @@ impl AttentionNetwork {
     /// Compiles the network from the bytes of `face_landmark_with_attention.tflite`, checking
     /// its input shape and its seven outputs' sizes.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, FaceError> {
-        let name = ModelFile::FaceLandmarkWithAttention.file_name();
-        let net = Network::from_tflite(bytes, name)?;
-        let invalid = |reason: String| FaceError::Tflite {
-            name: name.into(),
-            reason,
-        };
-        let expected = [1, LANDMARK_INPUT, LANDMARK_INPUT, 3];
-        if net.input_shape() != expected {
-            return Err(invalid(format!(
-                "input shape {:?}, expected {expected:?}",
-                net.input_shape()
-            )));
-        }
-        for (output, len) in OUTPUTS {
-            match net.output_named(output) {
-                Some(v) if v.len() == len => {}
-                Some(v) => {
-                    return Err(invalid(format!(
-                        "output {output} has {} values, expected {len}",
-                        v.len()
-                    )))
-                }
-                None => return Err(invalid(format!("no output named {output}"))),
-            }
-        }
+        let net = compile_checked(
+            ModelFile::FaceLandmarkWithAttention,
+            bytes,
+            LANDMARK_INPUT,
+            &OUTPUTS,
+        )?;
         Ok(AttentionNetwork { net })
     }
 

@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use crate::checked_network::compile_checked;
 use crate::{FaceError, ModelFile};
 use visage_nn::Network;
 
@@ -46,34 +47,11 @@ impl IrisNetwork {
     /// Compiles the network from the bytes of `iris_landmark.tflite`, checking its input shape
     /// and its two outputs.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, FaceError> {
-        let name = ModelFile::IrisLandmark.file_name();
-        let net = Network::from_tflite(bytes, name)?;
-        let invalid = |reason: String| FaceError::Tflite {
-            name: name.into(),
-            reason,
-        };
-        let expected = [1, IRIS_INPUT, IRIS_INPUT, 3];
-        if net.input_shape() != expected {
-            return Err(invalid(format!(
-                "input shape {:?}, expected {expected:?}",
-                net.input_shape()
-            )));
-        }
-        for (output, len) in [
+        let outputs = [
             (CONTOUR_OUTPUT, NUM_EYE_CONTOUR * 3),
             (IRIS_OUTPUT, NUM_IRIS_POINTS * 3),
-        ] {
-            match net.output_named(output) {
-                Some(v) if v.len() == len => {}
-                Some(v) => {
-                    return Err(invalid(format!(
-                        "output {output} has {} values, expected {len}",
-                        v.len()
-                    )))
-                }
-                None => return Err(invalid(format!("no output named {output}"))),
-            }
-        }
+        ];
+        let net = compile_checked(ModelFile::IrisLandmark, bytes, IRIS_INPUT, &outputs)?;
         Ok(IrisNetwork { net })
     }
 

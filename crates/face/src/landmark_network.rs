@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use crate::checked_network::compile_checked;
 use crate::{FaceError, ModelFile};
 use visage_nn::Network;
 
@@ -44,22 +45,8 @@ impl LandmarkNetwork {
 
     /// Compiles the network from the bytes of `face_landmark.tflite`.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, FaceError> {
-        let net = Network::from_tflite(bytes, ModelFile::FaceLandmark.file_name())?;
-        let expected = [1, LANDMARK_INPUT, LANDMARK_INPUT, 3];
-        if net.input_shape() != expected {
-            return Err(FaceError::Tflite {
-                name: ModelFile::FaceLandmark.file_name().into(),
-                reason: format!("input shape {:?}, expected {expected:?}", net.input_shape()),
-            });
-        }
-        for name in ["conv2d_21", "conv2d_31"] {
-            if net.output_named(name).is_none() {
-                return Err(FaceError::Tflite {
-                    name: ModelFile::FaceLandmark.file_name().into(),
-                    reason: format!("no output named {name}"),
-                });
-            }
-        }
+        let outputs = [("conv2d_21", NUM_LANDMARKS * 3), ("conv2d_31", 1)];
+        let net = compile_checked(ModelFile::FaceLandmark, bytes, LANDMARK_INPUT, &outputs)?;
         Ok(LandmarkNetwork { net })
     }
 

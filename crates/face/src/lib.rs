@@ -11,6 +11,7 @@
 
 #![forbid(unsafe_code)]
 
+mod checked_network;
 mod error;
 pub mod model_files;
 
