@@ -37,5 +37,5 @@ pub use gaze::{
     EYE_LOOK_FULL_RAD, IRIS_ROTATION_RADIUS_M,
 };
 pub use lid_gate::{LidGate, HOLD_BLINK};
-pub use pose_leak::{pose_leak_terms, LeakSample, PoseLeak, POSE_LEAK_TERMS};
+pub use pose_leak::{pose_leak_terms, LeakLearning, LeakSample, PoseLeak, POSE_LEAK_TERMS};
 pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP, MIN_RANGE};

@@ -5,12 +5,20 @@
 //! small errors in depth, and the fit explaining a pose error by a shape (a head rolled a few
 //! degrees too far reads as a jaw pushed sideways). On renders of neutral heads whose pose is
 //! known, that leak is largely the same for every face at the same pose. The table holds, per
-//! ARKit weight, a cubic polynomial in the head's read yaw, pitch and roll (Live Link Face's
-//! angles, radians): the weight's mean change at that pose relative to the same head's median
-//! over its turn, learned by ridge regression from rigid renders of several identities
-//! (`visage-eval`'s `pose_leak_table` example regenerates the file). Nothing in it comes from an
-//! expression: it does not learn which shapes a performer moves together, so a shape keeps its
-//! own reading and is never inferred from another one.
+//! ARKit weight, the weight's mean change at each node of a grid over the head's read yaw,
+//! pitch and roll (Live Link Face's angles, radians; interpolated trilinearly between nodes),
+//! relative to the same head's median over its turn, learned from rigid renders of several
+//! identities (`visage-eval`'s `pose_leak_table` example regenerates the file). Nothing in it
+//! comes from an expression: it does not learn which shapes a performer moves together, so a
+//! shape keeps its own reading and is never inferred from another one.
+//!
+//! A node's value is a kernel average of the rendered frames near it (a Gaussian in the
+//! angles, [`LeakLearning::bandwidth`]) pulled toward a cubic polynomial in the angles fitted
+//! to every frame by ridge regression, as if the polynomial were
+//! [`LeakLearning::prior_frames`] more frames at the node: where renders are dense the local
+//! average rules, where they are sparse the smooth fit does. The leak is not smooth over the
+//! whole turn: at the corners of a turn (near 40° of yaw with 20° of pitch) it rises steeply,
+//! and a cubic over the whole range took off about half of it there.
 //!
 //! [`PoseLeak::remove`] subtracts the table's value at the frame's read angles (clamped to
 //! the range it was learned over) and clips to [0, 1]. The angles are the fit's, so the table
@@ -22,15 +30,23 @@ use crate::arkit::ARKIT_BLENDSHAPE_COUNT;
 
 const EMBEDDED: &[u8] = include_bytes!("../data/pose_leak.bin");
 const MAGIC: &[u8; 8] = b"VSGLEAK\0";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 /// The largest leak taken off, either way: a table read past what it learned cannot wipe a
 /// weight out.
 const MAX_LEAK: f32 = 0.9;
+/// The file's values are 16-bit integers in units of 1 / `VALUE_SCALE` (steps of 6e-5 over
+/// ±2).
+const VALUE_SCALE: f32 = 16384.0;
+/// The most nodes along one axis a file may declare.
+const MAX_NODES: usize = 1024;
 /// `eyeBlinkLeft` and `eyeBlinkRight` in ARKit's order.
 const LIDS: [usize; 2] = [0, 7];
+/// Frames farther from a node than this many bandwidths do not count for it (their kernel
+/// weight is below e⁻⁸).
+const KERNEL_REACH: f64 = 4.0;
 
-/// Terms of the polynomial in the head's angles `[yaw, pitch, roll]` (radians): every
-/// monomial of degree ≤ 3, by degree (1; y, p, r; y², y·p, y·r, p², p·r, r²; …).
+/// Terms of the prior's polynomial in the head's angles `[yaw, pitch, roll]` (radians):
+/// every monomial of degree ≤ 3, by degree (1; y, p, r; y², y·p, y·r, p², p·r, r²; …).
 pub const POSE_LEAK_TERMS: usize = 20;
 
 /// The polynomial's terms at `angles`.
@@ -64,12 +80,29 @@ pub struct LeakSample {
     pub change: [f32; ARKIT_BLENDSHAPE_COUNT],
 }
 
-/// The table: per ARKit weight, the coefficients of its leak on [`pose_leak_terms`], and the
-/// largest yaw, pitch and roll (radians) it was learned over.
+/// How [`PoseLeak::learn`] turns samples into a table.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LeakLearning {
+    /// The largest yaw, pitch and roll (radians) the grid covers: the range of the turns
+    /// rendered.
+    pub max_angles: [f64; 3],
+    /// The grid's spacing, radians (each axis gets the nearest spacing that divides its range).
+    pub spacing: f64,
+    /// The kernel's standard deviation in the angles, radians.
+    pub bandwidth: f64,
+    /// The cubic prior's weight at a node, in frames.
+    pub prior_frames: f64,
+    /// The ridge added to the cubic's normal equations (the terms are radians, scale ~1).
+    pub ridge: f64,
+}
+
+/// The table: per node of a grid over the head's angles, each ARKit weight's leak.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PoseLeak {
-    coefficients: [[f32; POSE_LEAK_TERMS]; ARKIT_BLENDSHAPE_COUNT],
     max_angles: [f64; 3],
+    nodes: [usize; 3],
+    /// Node by node (roll fastest, then pitch, then yaw), the 52 weights' leaks.
+    values: Vec<[f32; ARKIT_BLENDSHAPE_COUNT]>,
 }
 
 impl PoseLeak {
@@ -81,32 +114,56 @@ impl PoseLeak {
         }
     }
 
-    /// Learns the table from `samples` by ridge regression (`ridge` times the identity added
-    /// to the normal equations; the terms are radians, so their scale is ~1), the same for
-    /// every weight; `max_angles` is the range of the turns rendered. `None` when the normal
-    /// equations are singular (no samples and no ridge).
-    pub fn learn(samples: &[LeakSample], ridge: f64, max_angles: [f64; 3]) -> Option<PoseLeak> {
-        let mut normal = faer::Mat::<f64>::zeros(POSE_LEAK_TERMS, POSE_LEAK_TERMS);
-        let mut rhs = faer::Mat::<f64>::zeros(POSE_LEAK_TERMS, ARKIT_BLENDSHAPE_COUNT);
-        for s in samples {
-            let t = pose_leak_terms(clamp(s.angles, max_angles));
-            for i in 0..POSE_LEAK_TERMS {
-                for j in 0..POSE_LEAK_TERMS {
-                    normal[(i, j)] += t[i] * t[j];
-                }
-                for (w, &c) in s.change.iter().enumerate() {
-                    rhs[(i, w)] += t[i] * f64::from(c);
+    /// Learns the table from `samples` (see the module's docs). `None` when the prior's
+    /// normal equations are singular (no samples and no ridge) or the grid is not a grid
+    /// (a range or the spacing not positive and finite).
+    pub fn learn(samples: &[LeakSample], how: &LeakLearning) -> Option<PoseLeak> {
+        let max = how.max_angles;
+        if !(how.spacing.is_finite() && how.spacing > 0.0)
+            || max.iter().any(|m| !(m.is_finite() && *m > 0.0))
+        {
+            return None;
+        }
+        let prior = cubic_fit(samples, how.ridge, max)?;
+        let nodes = max.map(|m| ((2.0 * m / how.spacing).ceil() as usize + 1).clamp(2, MAX_NODES));
+        let clamped: Vec<[f64; 3]> = samples.iter().map(|s| clamp(s.angles, max)).collect();
+        let inv_two_var = 1.0 / (2.0 * how.bandwidth * how.bandwidth);
+        let reach2 = (KERNEL_REACH * how.bandwidth).powi(2);
+        let mut values = Vec::with_capacity(nodes.iter().product());
+        for i in 0..nodes[0] {
+            for j in 0..nodes[1] {
+                for k in 0..nodes[2] {
+                    let at = [i, j, k];
+                    let node: [f64; 3] = std::array::from_fn(|a| {
+                        -max[a] + 2.0 * max[a] * at[a] as f64 / (nodes[a] - 1) as f64
+                    });
+                    let t = pose_leak_terms(node);
+                    let mut sum = prior.map(|c| {
+                        how.prior_frames * c.iter().zip(&t).map(|(c, t)| c * t).sum::<f64>()
+                    });
+                    let mut weight = how.prior_frames;
+                    for (a, s) in clamped.iter().zip(samples) {
+                        let d2: f64 = (0..3).map(|c| (a[c] - node[c]).powi(2)).sum();
+                        if d2 > reach2 {
+                            continue;
+                        }
+                        let w = (-d2 * inv_two_var).exp();
+                        weight += w;
+                        for (acc, &c) in sum.iter_mut().zip(&s.change) {
+                            *acc += w * f64::from(c);
+                        }
+                    }
+                    values.push(sum.map(|v| {
+                        let v = if weight > 0.0 { v / weight } else { 0.0 };
+                        quantize(v as f32)
+                    }));
                 }
             }
         }
-        for i in 0..POSE_LEAK_TERMS {
-            normal[(i, i)] += ridge;
-        }
-        let llt = normal.llt(faer::Side::Lower).ok()?;
-        let x = faer::linalg::solvers::Solve::solve(&llt, &rhs);
         Some(PoseLeak {
-            coefficients: std::array::from_fn(|w| std::array::from_fn(|t| x[(t, w)] as f32)),
-            max_angles,
+            max_angles: max,
+            nodes,
+            values,
         })
     }
 
@@ -115,15 +172,35 @@ impl PoseLeak {
         self.max_angles
     }
 
-    /// Each weight's leak at the head's `angles` (radians; clamped to [`Self::max_angles`]).
+    /// Each weight's leak at the head's `angles` (radians; clamped to [`Self::max_angles`]),
+    /// interpolated trilinearly between the grid's nodes.
     pub fn leak(&self, angles: [f64; 3]) -> [f32; ARKIT_BLENDSHAPE_COUNT] {
-        let t = pose_leak_terms(clamp(angles, self.max_angles));
-        self.coefficients.map(|c| {
-            c.iter()
-                .zip(&t)
-                .map(|(&c, t)| f64::from(c) * t)
-                .sum::<f64>() as f32
-        })
+        let a = clamp(angles, self.max_angles);
+        let mut cell = [0usize; 3];
+        let mut frac = [0.0f64; 3];
+        for c in 0..3 {
+            let n = self.nodes[c];
+            let x = (a[c] + self.max_angles[c]) / (2.0 * self.max_angles[c]) * (n - 1) as f64;
+            cell[c] = (x.floor() as usize).min(n - 2);
+            frac[c] = x - cell[c] as f64;
+        }
+        let mut out = [0.0f64; ARKIT_BLENDSHAPE_COUNT];
+        for corner in 0..8 {
+            let mut w = 1.0;
+            let mut index = 0;
+            for c in 0..3 {
+                let up = (corner >> (2 - c)) & 1;
+                w *= if up == 1 { frac[c] } else { 1.0 - frac[c] };
+                index = index * self.nodes[c] + cell[c] + up;
+            }
+            if w == 0.0 {
+                continue;
+            }
+            for (o, &v) in out.iter_mut().zip(&self.values[index]) {
+                *o += w * f64::from(v);
+            }
+        }
+        out.map(|v| v as f32)
     }
 
     /// Takes the leak at the head's `angles` off `weights`, each result clipped to [0, 1]. A
@@ -148,19 +225,22 @@ impl PoseLeak {
         }
     }
 
-    /// The file format: magic, version, weight count, term count, the three angle limits and
-    /// the coefficients (little-endian f32, weight by weight in ARKit's order).
+    /// The file format: magic, version, weight count, the nodes along yaw, pitch and roll, the
+    /// three angle limits (f32), then node by node the weights' leaks as 16-bit integers in
+    /// units of 1 / 16384 (all little-endian).
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(32 + ARKIT_BLENDSHAPE_COUNT * 4 * POSE_LEAK_TERMS);
+        let mut out = Vec::with_capacity(40 + self.values.len() * ARKIT_BLENDSHAPE_COUNT * 2);
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&VERSION.to_le_bytes());
         out.extend_from_slice(&(ARKIT_BLENDSHAPE_COUNT as u32).to_le_bytes());
-        out.extend_from_slice(&(POSE_LEAK_TERMS as u32).to_le_bytes());
+        for n in self.nodes {
+            out.extend_from_slice(&(n as u32).to_le_bytes());
+        }
         for v in self.max_angles {
             out.extend_from_slice(&(v as f32).to_le_bytes());
         }
-        for c in self.coefficients.iter().flatten() {
-            out.extend_from_slice(&c.to_le_bytes());
+        for v in self.values.iter().flatten() {
+            out.extend_from_slice(&((v * VALUE_SCALE).round() as i16).to_le_bytes());
         }
         out
     }
@@ -170,30 +250,70 @@ impl PoseLeak {
         let mut r = Reader::new(bytes);
         r.header(MAGIC, VERSION)?;
         let weights = r.u32()? as usize;
-        let terms = r.u32()? as usize;
-        if weights != ARKIT_BLENDSHAPE_COUNT || terms != POSE_LEAK_TERMS {
+        if weights != ARKIT_BLENDSHAPE_COUNT {
             return Err(format!(
-                "{weights} weights × {terms} terms, expected {ARKIT_BLENDSHAPE_COUNT} × \
-                 {POSE_LEAK_TERMS}"
+                "{weights} weights, expected {ARKIT_BLENDSHAPE_COUNT}"
+            ));
+        }
+        let nodes = [r.u32()?, r.u32()?, r.u32()?].map(|n| n as usize);
+        if nodes.iter().any(|n| !(2..=MAX_NODES).contains(n)) {
+            return Err(format!(
+                "grid of {nodes:?} nodes (2 to {MAX_NODES} per axis)"
             ));
         }
         let max_angles = [r.f32()?, r.f32()?, r.f32()?].map(f64::from);
         if max_angles.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
             return Err(format!("angle limits {max_angles:?} are not positive"));
         }
-        let mut coefficients = [[0.0; POSE_LEAK_TERMS]; ARKIT_BLENDSHAPE_COUNT];
-        for v in coefficients.iter_mut().flatten() {
-            *v = r.f32()?;
-            if !v.is_finite() {
-                return Err("a coefficient is not finite".into());
-            }
-        }
+        let count: usize = nodes.iter().product();
+        let raw = r.take(count * ARKIT_BLENDSHAPE_COUNT * 2)?;
+        let values = raw
+            .chunks_exact(ARKIT_BLENDSHAPE_COUNT * 2)
+            .map(|node| {
+                std::array::from_fn(|w| {
+                    f32::from(i16::from_le_bytes([node[2 * w], node[2 * w + 1]])) / VALUE_SCALE
+                })
+            })
+            .collect();
         r.finish()?;
         Ok(PoseLeak {
-            coefficients,
             max_angles,
+            nodes,
+            values,
         })
     }
+}
+
+/// The cubic prior: per weight, the ridge-regression coefficients on [`pose_leak_terms`].
+fn cubic_fit(
+    samples: &[LeakSample],
+    ridge: f64,
+    max: [f64; 3],
+) -> Option<[[f64; POSE_LEAK_TERMS]; ARKIT_BLENDSHAPE_COUNT]> {
+    let mut normal = faer::Mat::<f64>::zeros(POSE_LEAK_TERMS, POSE_LEAK_TERMS);
+    let mut rhs = faer::Mat::<f64>::zeros(POSE_LEAK_TERMS, ARKIT_BLENDSHAPE_COUNT);
+    for s in samples {
+        let t = pose_leak_terms(clamp(s.angles, max));
+        for i in 0..POSE_LEAK_TERMS {
+            for j in 0..POSE_LEAK_TERMS {
+                normal[(i, j)] += t[i] * t[j];
+            }
+            for (w, &c) in s.change.iter().enumerate() {
+                rhs[(i, w)] += t[i] * f64::from(c);
+            }
+        }
+    }
+    for i in 0..POSE_LEAK_TERMS {
+        normal[(i, i)] += ridge;
+    }
+    let llt = normal.llt(faer::Side::Lower).ok()?;
+    let x = faer::linalg::solvers::Solve::solve(&llt, &rhs);
+    Some(std::array::from_fn(|w| std::array::from_fn(|t| x[(t, w)])))
+}
+
+/// `v` on the file's 16-bit grid of values (so a learned table and its file are the same).
+fn quantize(v: f32) -> f32 {
+    (v.clamp(-1.99, 1.99) * VALUE_SCALE).round() / VALUE_SCALE
 }
 
 fn clamp(angles: [f64; 3], max: [f64; 3]) -> [f64; 3] {
@@ -208,9 +328,20 @@ mod tests {
     fn the_embedded_table_parses_and_round_trips() {
         let t = PoseLeak::embedded();
         assert_eq!(PoseLeak::parse(&t.to_bytes()), Ok(t.clone()));
-        // Learned over a turn of tens of degrees, and small where the face looks ahead.
+        // Learned over a turn of tens of degrees, and small where the face looks ahead (the
+        // largest there, eyeLookInRight, 0.14).
         assert!(t.max_angles().iter().all(|&a| a > 0.1 && a < 1.2), "{t:?}");
-        assert!(t.leak([0.0; 3]).iter().all(|l| l.abs() < 0.1), "{t:?}");
+        assert!(t.leak([0.0; 3]).iter().all(|l| l.abs() < 0.2), "{t:?}");
+    }
+
+    fn learning(ridge: f64) -> LeakLearning {
+        LeakLearning {
+            max_angles: [0.6, 0.4, 0.2],
+            spacing: 0.1,
+            bandwidth: 0.03,
+            prior_frames: 1.0,
+            ridge,
+        }
     }
 
     #[test]
@@ -223,10 +354,10 @@ mod tests {
             c
         };
         let mut samples = Vec::new();
-        for i in -6..=6 {
-            for j in -4..=4 {
-                for k in -2..=2 {
-                    let angles = [i as f64 * 0.1, j as f64 * 0.1, k as f64 * 0.1];
+        for i in -15..=15 {
+            for j in -10..=10 {
+                for k in -5..=5 {
+                    let angles = [i as f64 * 0.04, j as f64 * 0.04, k as f64 * 0.04];
                     samples.push(LeakSample {
                         angles,
                         change: truth(angles),
@@ -234,13 +365,13 @@ mod tests {
                 }
             }
         }
-        let max = [0.6, 0.4, 0.2];
-        let t = PoseLeak::learn(&samples, 1e-9, max).unwrap();
+        let t = PoseLeak::learn(&samples, &learning(1e-9)).unwrap();
+        assert_eq!(t.nodes, [13, 9, 5]);
         let a = [0.45, -0.25, 0.15];
         let leak = t.leak(a);
         let expected = truth(a);
         for w in 0..ARKIT_BLENDSHAPE_COUNT {
-            assert!((leak[w] - expected[w]).abs() < 1e-4, "{w}: {leak:?}");
+            assert!((leak[w] - expected[w]).abs() < 5e-3, "{w}: {leak:?}");
         }
         // A shape's leak is subtracted (clipping at 0); outside the learned range the table
         // holds its edge.
@@ -250,7 +381,7 @@ mod tests {
         let angles = a.map(|v| v as f32);
         t.remove(angles, &mut weights);
         assert!(
-            (weights[3] - (0.6 - expected[3])).abs() < 1e-4,
+            (weights[3] - (0.6 - leak[3])).abs() < 1e-6,
             "{}",
             weights[3]
         );
@@ -265,15 +396,11 @@ mod tests {
         let lid = |w: f32, l: f32| {
             let mut c = [0.0f32; ARKIT_BLENDSHAPE_COUNT];
             c[LIDS[0]] = l;
-            let one = PoseLeak::learn(
-                &[LeakSample {
-                    angles: [0.0; 3],
-                    change: c,
-                }],
-                1e-12,
-                max,
-            )
-            .unwrap();
+            let sample = LeakSample {
+                angles: [0.0; 3],
+                change: c,
+            };
+            let one = PoseLeak::learn(&[sample], &learning(1e-12)).unwrap();
             let mut weights = [0.0f32; ARKIT_BLENDSHAPE_COUNT];
             weights[LIDS[0]] = w;
             one.remove([0.0; 3], &mut weights);
@@ -286,8 +413,35 @@ mod tests {
         assert!(lid(0.0, -0.2).abs() < 1e-6);
         assert!((lid(0.4, -0.2) - 0.5).abs() < 1e-4);
         // Without samples only the ridge is left: no leak at all.
-        let empty = PoseLeak::learn(&[], 1.0, max).unwrap();
+        let empty = PoseLeak::learn(&[], &learning(1.0)).unwrap();
         assert!(empty.leak(a).iter().all(|&l| l == 0.0));
+        // Nor a grid without a spacing.
+        let mut no_grid = learning(1.0);
+        no_grid.spacing = 0.0;
+        assert!(PoseLeak::learn(&samples, &no_grid).is_none());
+    }
+
+    #[test]
+    fn a_steep_corner_is_kept_where_a_cubic_would_smooth_it() {
+        // Weight 16 leaks 0.6 only where yaw < −0.5 and pitch < −0.25 (a turn's corner).
+        let mut samples = Vec::new();
+        for i in -30..=30 {
+            for j in -20..=20 {
+                let angles = [i as f64 * 0.02, j as f64 * 0.02, 0.0];
+                let mut change = [0.0f32; ARKIT_BLENDSHAPE_COUNT];
+                if angles[0] < -0.5 && angles[1] < -0.25 {
+                    change[16] = 0.6;
+                }
+                samples.push(LeakSample { angles, change });
+            }
+        }
+        let t = PoseLeak::learn(&samples, &learning(1.0)).unwrap();
+        assert!(
+            t.leak([-0.58, -0.35, 0.0])[16] > 0.45,
+            "{:?}",
+            t.leak([-0.58, -0.35, 0.0])
+        );
+        assert!(t.leak([0.0, 0.0, 0.0])[16].abs() < 0.02);
     }
 
     #[test]
