@@ -24,7 +24,7 @@ use std::thread::JoinHandle;
 
 use image::RgbImage;
 
-use crate::{Frame, VideoError};
+use crate::{Frame, FramePool, VideoError};
 
 /// What `ffprobe` reports about the first video stream.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -248,6 +248,7 @@ pub struct VideoReader {
     stderr: Option<JoinHandle<String>>,
     next: usize,
     done: bool,
+    pool: FramePool,
 }
 
 impl VideoReader {
@@ -284,7 +285,14 @@ impl VideoReader {
             stderr,
             next: 0,
             done: false,
+            pool: FramePool::default(),
         })
+    }
+
+    /// The pool the frames' buffers come from: a frame handed back to it
+    /// ([`FramePool::recycle`]) lends its buffer to a later frame.
+    pub fn frame_pool(&self) -> FramePool {
+        self.pool.clone()
     }
 
     /// Size, frame rate and rotation of the stream.
@@ -352,10 +360,11 @@ impl Iterator for VideoReader {
         }
         let (w, h) = (self.info.width, self.info.height);
         let len = w as usize * h as usize * 3;
-        // The pipe's bytes go straight into the frame's allocation, which is never zero-filled
-        // first (a 4K frame is 25 MB). A read error ends the frame like an early end of the
-        // stream; `finish` then reports what FFmpeg said.
-        let mut buf = Vec::with_capacity(len);
+        // The pipe's bytes go straight into the frame's buffer — one handed back to the pool,
+        // else a new allocation — which is never zero-filled first (a 4K frame is 25 MB). A
+        // read error ends the frame like an early end of the stream; `finish` then reports
+        // what FFmpeg said.
+        let mut buf = self.pool.buffer(len);
         if let Some(out) = self.stdout.as_mut() {
             let _ = out.by_ref().take(len as u64).read_to_end(&mut buf);
         }

@@ -23,6 +23,7 @@ mod error;
 mod exif;
 pub mod ffmpeg;
 mod frame;
+mod frame_pool;
 mod live_capture;
 mod source;
 
@@ -31,5 +32,6 @@ pub use error::VideoError;
 pub use exif::{focal_length_35mm, focal_length_35mm_in};
 pub use ffmpeg::{ffmpeg_available, probe, VideoInfo, VideoReader};
 pub use frame::Frame;
+pub use frame_pool::FramePool;
 pub use live_capture::{CapturedFrame, LiveCapture, LiveOptions};
 pub use source::{decode_image, is_image_path, read_image, FrameSource, IMAGE_EXTENSIONS};

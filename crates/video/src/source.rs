@@ -1,7 +1,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::ffmpeg::VideoReader;
-use crate::{Frame, VideoError};
+use crate::{Frame, FramePool, VideoError};
 
 /// File extensions read as still images (case-insensitive).
 pub const IMAGE_EXTENSIONS: [&str; 3] = ["png", "jpg", "jpeg"];
@@ -115,6 +115,15 @@ pub enum FrameSource {
 }
 
 impl FrameSource {
+    /// Where a video's frame buffers come from, to hand frames back to once they are done
+    /// with ([`FramePool`]); `None` for images and generated frames.
+    pub fn frame_pool(&self) -> Option<FramePool> {
+        match self {
+            FrameSource::Video(reader) => Some(reader.frame_pool()),
+            _ => None,
+        }
+    }
+
     /// Opens `path`: a folder → its `.png/.jpg/.jpeg` files sorted by name (hidden files left
     /// out: macOS's `._name.jpg` resource forks and other dot-files are not frames); an image
     /// file → that image; anything else → a video through FFmpeg.

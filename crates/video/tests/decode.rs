@@ -49,6 +49,37 @@ fn decodes_every_frame_of_a_video() {
     assert_ne!(frames[0].image, frames[10].image);
 }
 
+/// Frames handed back to the source's pool lend their buffers to later frames, which decode
+/// to the same pixels as fresh ones (every byte of a reused buffer is read again).
+#[test]
+#[cfg_attr(not(ffmpeg), ignore = "needs FFmpeg")]
+fn frames_decode_the_same_into_recycled_buffers() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = test_video(dir.path());
+    let fresh: Vec<_> = FrameSource::open(&path)
+        .unwrap()
+        .collect::<Result<_, _>>()
+        .unwrap();
+    let mut source = FrameSource::open(&path).unwrap();
+    let pool = source.frame_pool().expect("a video has a frame pool");
+    let mut recycled = Vec::new();
+    let mut reused = 0;
+    for (i, frame) in source.by_ref().enumerate() {
+        let frame = frame.unwrap();
+        assert_eq!(frame.image, fresh[i].image, "frame {i}");
+        let pointer = frame.image.as_raw().as_ptr();
+        reused += usize::from(recycled.contains(&pointer));
+        recycled.push(pointer);
+        pool.recycle(frame);
+    }
+    assert_eq!(recycled.len(), fresh.len());
+    assert_eq!(
+        reused,
+        fresh.len() - 1,
+        "every frame after the first reuses a buffer"
+    );
+}
+
 #[test]
 #[cfg_attr(not(ffmpeg), ignore = "needs FFmpeg")]
 fn truncated_video_yields_readable_frames_then_names_the_break() {

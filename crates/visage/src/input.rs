@@ -7,7 +7,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use visage_run_folder::FrameSelection;
-use visage_video::{focal_length_35mm, is_image_path, read_image, Frame, FrameSource, VideoError};
+use visage_video::{
+    focal_length_35mm, is_image_path, read_image, Frame, FramePool, FrameSource, VideoError,
+};
 
 use crate::Error;
 
@@ -27,6 +29,8 @@ pub struct Input {
     copies: Option<(FrameFilter, KeptFrames)>,
     /// Set from outside (Ctrl-C): the input ends before its next frame.
     stop: Option<Arc<AtomicBool>>,
+    /// Where the source's frame buffers come from (a video's), to hand frames back to.
+    pool: Option<FramePool>,
 }
 
 /// Chooses the frames [`Input::keep_copies`] copies.
@@ -126,6 +130,7 @@ impl Input {
     ) -> Input {
         Input {
             path: path.to_owned(),
+            pool: source.frame_pool(),
             source,
             width,
             height,
@@ -137,6 +142,12 @@ impl Input {
             copies: None,
             stop: None,
         }
+    }
+
+    /// Where the frames' buffers come from, for a video: a frame handed back to it once its
+    /// stage is done with it ([`FramePool::recycle`]) lends its buffer to a later frame.
+    pub fn frame_pool(&self) -> Option<FramePool> {
+        self.pool.clone()
     }
 
     /// Keeps only the frames whose index is a multiple of `every` (they keep their index).
@@ -266,6 +277,9 @@ impl Input {
                 Err(e) => return Some(Err(e.into())),
             };
             if frame.index % self.every != 0 || self.after.is_some_and(|a| frame.index <= a) {
+                if let Some(pool) = &self.pool {
+                    pool.recycle(frame);
+                }
                 continue;
             }
             self.kept += 1;

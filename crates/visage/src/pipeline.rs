@@ -28,7 +28,7 @@ use visage_camera::Intrinsics;
 use visage_fem::{ClipOptions, SurfaceQuality};
 use visage_fusion::ClipFrame;
 use visage_morphable::FaceFitter;
-use visage_video::Frame;
+use visage_video::{Frame, FramePool};
 
 use crate::depth_stage::DepthStage;
 use crate::input::Decoded;
@@ -113,6 +113,8 @@ pub(crate) fn run_stages(
         sink,
     };
     let (errors, sink_error) = std::thread::scope(|scope| {
+        // Frames the later stages are done with go back to the decoder's buffers.
+        let pool = input.frame_pool();
         let decode = scope.spawn(move || decode_stage(input, decoded_tx));
         let face = &mut face;
         let track = scope.spawn(move || track_stage(face, decoded_rx, tracked_tx));
@@ -126,19 +128,28 @@ pub(crate) fn run_stages(
             let to_fusion =
                 move |(tracked, _): (Tracked, Option<Frame>)| depth_tx.send(tracked).is_ok();
             let modelling =
-                scope.spawn(move || model_stage(model, keep_frames, tracked_rx, to_fusion));
+                scope.spawn(move || model_stage(model, false, pool, tracked_rx, to_fusion));
             (modelling, None, None)
         } else {
             let (modelled_tx, modelled_rx) = sync_channel(QUEUE_CAPACITY);
             let (checked_tx, checked_rx) = sync_channel(QUEUE_CAPACITY);
             let to_checks = move |item| modelled_tx.send(item).is_ok();
-            let modelling =
-                scope.spawn(move || model_stage(model, keep_frames, tracked_rx, to_checks));
+            let model_pool = pool.clone();
+            let modelling = scope
+                .spawn(move || model_stage(model, keep_frames, model_pool, tracked_rx, to_checks));
             let keypoints = &mut keypoints;
-            let checking = scope
-                .spawn(move || keypoint_stage(keypoints, depth_images, modelled_rx, checked_tx));
+            let keypoint_pool = pool.clone();
+            let checking = scope.spawn(move || {
+                keypoint_stage(
+                    keypoints,
+                    depth_images,
+                    keypoint_pool,
+                    modelled_rx,
+                    checked_tx,
+                )
+            });
             let depth = &mut depth;
-            let depth_maps = scope.spawn(move || depth_stage(depth, checked_rx, depth_tx));
+            let depth_maps = scope.spawn(move || depth_stage(depth, pool, checked_rx, depth_tx));
             (modelling, Some(checking), Some(depth_maps))
         };
         let fusion =
@@ -198,11 +209,19 @@ fn track_stage(
     Ok(())
 }
 
-/// The model fit; the frame goes on only when the keypoint check needs it. `out` hands a frame
-/// to the next stage, `false` when that stage has stopped.
+/// Hands `frame` back to the decoder's buffers, when it has them.
+fn recycle(pool: &Option<FramePool>, frame: Frame) {
+    if let Some(pool) = pool {
+        pool.recycle(frame);
+    }
+}
+
+/// The model fit; the frame goes on only when the keypoint check needs it (else back to
+/// `pool`). `out` hands a frame to the next stage, `false` when that stage has stopped.
 fn model_stage(
     model: &mut Option<ModelStage>,
     keep_frames: bool,
+    pool: Option<FramePool>,
     input: Receiver<(Tracked, Frame)>,
     mut out: impl FnMut((Tracked, Option<Frame>)) -> bool,
 ) -> Result<(), Error> {
@@ -210,7 +229,12 @@ fn model_stage(
         if let Some(model) = model {
             model.fit(&frame.image, &mut tracked)?;
         }
-        let frame = keep_frames.then_some(frame);
+        let frame = if keep_frames {
+            Some(frame)
+        } else {
+            recycle(&pool, frame);
+            None
+        };
         if !out((tracked, frame)) {
             return Ok(()); // a later stage stopped
         }
@@ -219,10 +243,12 @@ fn model_stage(
 }
 
 /// The keypoint check, on its own thread (it costs about as much as the model fit); without
-/// it, a pass-through. The frame goes on only when `keep_frames` (a depth network needs it).
+/// it, a pass-through. The frame goes on only when `keep_frames` (a depth network needs it;
+/// else back to `pool`).
 fn keypoint_stage(
     keypoints: &mut Option<KeypointMotion>,
     keep_frames: bool,
+    pool: Option<FramePool>,
     input: Receiver<(Tracked, Option<Frame>)>,
     out: SyncSender<(Tracked, Option<Frame>)>,
 ) -> Result<(), Error> {
@@ -230,7 +256,13 @@ fn keypoint_stage(
         if let (Some(keypoints), Some(frame)) = (keypoints.as_mut(), &frame) {
             keypoints.observe(&frame.image, &mut tracked);
         }
-        let frame = frame.filter(|_| keep_frames);
+        let frame = match frame {
+            Some(frame) if !keep_frames => {
+                recycle(&pool, frame);
+                None
+            }
+            frame => frame,
+        };
         if out.send((tracked, frame)).is_err() {
             return Ok(());
         }
@@ -242,12 +274,16 @@ fn keypoint_stage(
 /// costliest stage); without them, a pass-through.
 fn depth_stage(
     depth: &mut Option<DepthStage>,
+    pool: Option<FramePool>,
     input: Receiver<(Tracked, Option<Frame>)>,
     out: SyncSender<Tracked>,
 ) -> Result<(), Error> {
     for (mut tracked, frame) in input {
         if let Some(depth) = depth.as_mut() {
             depth.acquire(frame.as_ref().map(|f| &f.image), &mut tracked)?;
+        }
+        if let Some(frame) = frame {
+            recycle(&pool, frame);
         }
         if out.send(tracked).is_err() {
             return Ok(());
