@@ -4,15 +4,15 @@
 //! network's view-dependent bias that the fit's view correction leaves, the fitted identity's
 //! small errors in depth, and the fit explaining a pose error by a shape (a head rolled a few
 //! degrees too far reads as a jaw pushed sideways). On renders of neutral heads whose pose is
-//! known, that leak is largely the same for every face at the same pose. The table holds, per
-//! ARKit weight, the weight's mean change at each node of a grid over the head's read yaw,
+//! known, much of that leak is the same for every face at the same pose. The table holds, per
+//! ARKit weight, the weight's change at each node of a grid over the head's read yaw,
 //! pitch and roll (Live Link Face's angles, radians; interpolated trilinearly between nodes),
 //! relative to the same head's median over its turn, learned from rigid renders of several
 //! identities (`visage-eval`'s `pose_leak_table` example regenerates the file). Nothing in it
 //! comes from an expression: it does not learn which shapes a performer moves together, so a
 //! shape keeps its own reading and is never inferred from another one.
 //!
-//! A node's value is a kernel average of the rendered frames near it (a Gaussian in the
+//! A node's value starts from a kernel average of the rendered frames near it (a Gaussian in the
 //! angles, [`LeakLearning::bandwidth`]) pulled toward a cubic polynomial in the angles fitted
 //! to every frame by ridge regression, as if the polynomial were
 //! [`LeakLearning::prior_frames`] more frames at the node: where renders are dense the local
