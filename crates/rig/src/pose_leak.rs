@@ -449,20 +449,35 @@ mod tests {
         assert!(PoseLeak::learn(&samples, &no_grid).is_none());
     }
 
-    #[test]
-    fn a_steep_corner_is_kept_where_a_cubic_would_smooth_it() {
-        // Weight 16 leaks 0.6 only where yaw < −0.5 and pitch < −0.25 (a turn's corner).
+    /// Samples every 0.02 rad of yaw (±0.6) and pitch (±0.4), no roll: one per change `faces`
+    /// gives at the angles.
+    fn over_yaw_and_pitch(
+        faces: impl Fn([f64; 3]) -> Vec<[f32; ARKIT_BLENDSHAPE_COUNT]>,
+    ) -> Vec<LeakSample> {
         let mut samples = Vec::new();
         for i in -30..=30 {
             for j in -20..=20 {
                 let angles = [i as f64 * 0.02, j as f64 * 0.02, 0.0];
-                let mut change = [0.0f32; ARKIT_BLENDSHAPE_COUNT];
-                if angles[0] < -0.5 && angles[1] < -0.25 {
-                    change[16] = 0.6;
-                }
-                samples.push(LeakSample { angles, change });
+                samples.extend(
+                    faces(angles)
+                        .into_iter()
+                        .map(|change| LeakSample { angles, change }),
+                );
             }
         }
+        samples
+    }
+
+    #[test]
+    fn a_steep_corner_is_kept_where_a_cubic_would_smooth_it() {
+        // Weight 16 leaks 0.6 only where yaw < −0.5 and pitch < −0.25 (a turn's corner).
+        let samples = over_yaw_and_pitch(|angles| {
+            let mut change = [0.0f32; ARKIT_BLENDSHAPE_COUNT];
+            if angles[0] < -0.5 && angles[1] < -0.25 {
+                change[16] = 0.6;
+            }
+            vec![change]
+        });
         let t = PoseLeak::learn(&samples, &learning(1.0)).unwrap();
         assert!(
             t.leak([-0.58, -0.35, 0.0])[16] > 0.45,
@@ -476,18 +491,16 @@ mod tests {
     fn a_spread_takes_off_what_faces_that_leak_more_do() {
         // At every view half the faces leak 0.2 of weight 5 (and of a lid) and half none: the
         // average face leaks 0.1, one standard deviation above it 0.2.
-        let mut samples = Vec::new();
-        for i in -30..=30 {
-            for j in -20..=20 {
-                let angles = [i as f64 * 0.02, j as f64 * 0.02, 0.0];
-                for face in 0..2 {
+        let samples = over_yaw_and_pitch(|_| {
+            (0..2)
+                .map(|face| {
                     let mut change = [0.0f32; ARKIT_BLENDSHAPE_COUNT];
                     change[5] = 0.2 * face as f32;
                     change[LIDS[0]] = 0.2 * face as f32;
-                    samples.push(LeakSample { angles, change });
-                }
-            }
-        }
+                    change
+                })
+                .collect()
+        });
         let mut how = learning(1.0);
         let average = PoseLeak::learn(&samples, &how).unwrap();
         how.spread = 1.0;
