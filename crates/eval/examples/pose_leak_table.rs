@@ -21,25 +21,13 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use visage::Intrinsics;
 use visage_eval::expression_scores::{quantile_sorted, rigid_leak};
 use visage_eval::{
-    evaluate_expressions, Curves, ExpressionOptions, HeadMotion, HeadRender, IdentityChoice,
-    ReplayOptions,
+    head_curves, head_replay, run_two_at_a_time, table_render, Curves, ExpressionOptions, Head,
+    HeadRender, ReplayOptions, HELD_OUT_HEADS, TRAINING_HEADS,
 };
 use visage_rig::{LeakLearning, LeakSample, PoseLeak, ARKIT_BLENDSHAPES, ARKIT_BLENDSHAPE_COUNT};
 
-const TRAIN: [(usize, u64); 8] = [
-    (1, 101),
-    (2, 102),
-    (5, 103),
-    (8, 104),
-    (12, 105),
-    (17, 106),
-    (25, 107),
-    (29, 108),
-];
-const HELD_OUT: [(usize, u64); 4] = [(0, 0), (3, 0), (11, 0), (20, 0)];
 const TRAIN_MOTION_DEG: [f64; 3] = [40.0, 25.0, 15.0];
 const TEST_MOTION_DEG: [f64; 3] = [38.0, 20.0, 10.0];
 const RIDGE: f64 = 10.0;
@@ -49,39 +37,28 @@ const PRIOR_FRAMES: f64 = 1.0;
 const SPREAD: f64 = 2.0;
 const REPORTED_LEAK: f32 = 0.15;
 
-/// The curves of a neutral head of identity mode `identity` turned by the motion `seed` over
-/// `motion_deg`, the table off.
+/// The curves of a neutral head `who` turned by its motion over `motion_deg`, the table off.
 fn rigid_turn(
-    take: &PathBuf,
+    take: &Path,
     render: &Arc<HeadRender>,
     models: &Path,
-    (identity, seed): (usize, u64),
+    who: Head,
     motion_deg: [f64; 3],
     stride: usize,
     max_frames: Option<usize>,
 ) -> Curves {
     let options = ExpressionOptions {
         replay: ReplayOptions {
-            identity: IdentityChoice::Mode(identity),
-            seed,
-            motion: HeadMotion {
-                yaw_deg: motion_deg[0],
-                pitch_deg: motion_deg[1],
-                roll_deg: motion_deg[2],
-                ..HeadMotion::default()
-            },
             rigid: Some(None),
             stride,
             max_frames,
-            ..ReplayOptions::default()
+            ..head_replay(who, motion_deg)
         },
         models: Some(models.to_path_buf()),
         keep_pose_leak: true,
         ..ExpressionOptions::default()
     };
-    let results = evaluate_expressions(std::slice::from_ref(take), render, &options)
-        .unwrap_or_else(|e| panic!("identity {identity}: {e}"));
-    results.takes.into_iter().next().unwrap().curves
+    head_curves(take, render, &options)
 }
 
 /// Each weight's change from its median over the turn, with the read angles.
@@ -127,39 +104,21 @@ fn main() {
         eprintln!("usage: pose_leak_table ICT_MODEL_DIR MODELS_DIR TAKE.csv OUT.bin");
         std::process::exit(2);
     };
-    let f = 0.5 * 640.0 / 27.5f64.to_radians().tan();
-    let k = Intrinsics::new(640, 480, f, f, 319.5, 239.5).expect("intrinsics");
-    let render = Arc::new(HeadRender::load(model_dir, k, 0.5).expect("the head renderer"));
-
-    // Two heads at a time on threads of their own: the pipeline blocks on its own stages, so
-    // it must not run inside rayon's pool, which its networks use.
-    let train: Vec<LeakSample> = TRAIN
-        .chunks(2)
-        .flat_map(|pair| {
-            std::thread::scope(|s| {
-                let runs: Vec<_> = pair
-                    .iter()
-                    .map(|&who| {
-                        let render = &render;
-                        s.spawn(move || {
-                            samples(&rigid_turn(
-                                take,
-                                render,
-                                models,
-                                who,
-                                TRAIN_MOTION_DEG,
-                                2,
-                                None,
-                            ))
-                        })
-                    })
-                    .collect();
-                runs.into_iter()
-                    .flat_map(|r| r.join().expect("a training run"))
-                    .collect::<Vec<_>>()
-            })
-        })
-        .collect();
+    let render = table_render(model_dir).expect("the head renderer");
+    let train: Vec<LeakSample> = run_two_at_a_time(&TRAINING_HEADS, |who| {
+        samples(&rigid_turn(
+            take,
+            &render,
+            models,
+            who,
+            TRAIN_MOTION_DEG,
+            2,
+            None,
+        ))
+    })
+    .into_iter()
+    .flatten()
+    .collect();
     let how = LeakLearning {
         max_angles: TRAIN_MOTION_DEG.map(f64::to_radians),
         spacing: SPACING_DEG.to_radians(),
@@ -172,10 +131,10 @@ fn main() {
     println!(
         "learned from {} frames of {} heads",
         train.len(),
-        TRAIN.len()
+        TRAINING_HEADS.len()
     );
 
-    for who in HELD_OUT {
+    for who in HELD_OUT_HEADS {
         let c = rigid_turn(take, &render, models, who, TEST_MOTION_DEG, 1, Some(1000));
         let removed: Vec<[f32; ARKIT_BLENDSHAPE_COUNT]> = c
             .read

@@ -37,8 +37,12 @@ pub struct ExpressionOptions {
     pub save_frames: usize,
     pub frames_dir: Option<PathBuf>,
     /// Score the weights as the fit reads them, with what the head's turn adds left on
-    /// (`visage_rig::PoseLeak` off; its table is learned from such runs).
+    /// (`visage_rig::PoseLeak` off, and `visage_rig::MouthLeak` with it; the pose leak's
+    /// table is learned from such runs).
     pub keep_pose_leak: bool,
+    /// Score the weights with what the mouth's shapes add to the upper face's left on
+    /// (`visage_rig::MouthLeak` off; its table is learned from such runs).
+    pub keep_mouth_leak: bool,
 }
 
 /// One shape's scores over a take (or all takes).
@@ -264,7 +268,8 @@ fn evaluate_take(
     let input = replay.input(Arc::clone(render), save, options.frames_dir.clone())?;
     let mut builder = Reconstructor::builder()
         .intrinsics(*render.intrinsics())
-        .pose_leak(!options.keep_pose_leak);
+        .pose_leak(!options.keep_pose_leak)
+        .mouth_leak(!(options.keep_pose_leak || options.keep_mouth_leak));
     if let Some(dir) = &options.models {
         builder = builder.models_dir(dir);
     }

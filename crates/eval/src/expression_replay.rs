@@ -50,6 +50,9 @@ pub struct ReplayOptions {
     pub stride: usize,
     /// Play at most this many frames.
     pub max_frames: Option<usize>,
+    /// Play only these of the take's weights (indices in `ARKIT_BLENDSHAPES`' order), the
+    /// others held at 0 (`None`: all of them).
+    pub only: Option<Vec<usize>>,
 }
 
 impl Default for ReplayOptions {
@@ -62,6 +65,7 @@ impl Default for ReplayOptions {
             start: 0,
             stride: 1,
             max_frames: None,
+            only: None,
         }
     }
 }
@@ -159,9 +163,17 @@ impl Replay {
             .take(options.max_frames.unwrap_or(usize::MAX))
             .map(|row| {
                 let time_s = row.time_s - t0;
+                let mut weights = held.unwrap_or(row.weights);
+                if let Some(only) = &options.only {
+                    for (i, w) in weights.iter_mut().enumerate() {
+                        if !only.contains(&i) {
+                            *w = 0.0;
+                        }
+                    }
+                }
                 PlayedFrame {
                     time_s,
-                    weights: held.unwrap_or(row.weights),
+                    weights,
                     pose: track.at(time_s),
                 }
             })

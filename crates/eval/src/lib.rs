@@ -54,6 +54,7 @@ mod sift_fairing;
 pub mod simulated_tracker;
 mod skin_texture;
 mod synthesis;
+mod table_heads;
 mod taubin;
 mod trajectory;
 mod vertex_filter;
@@ -106,6 +107,9 @@ pub use skin_texture::{sequence_skin_albedo, skin_albedo};
 pub use synthesis::{
     synthesize, SynthesisConfig, SyntheticFrame, SyntheticSequence, EXPRESSION_ACTIVITY,
     PIVOT_DEPTH_M, SKIN_ALBEDO,
+};
+pub use table_heads::{
+    head_curves, head_replay, run_two_at_a_time, table_render, Head, HELD_OUT_HEADS, TRAINING_HEADS,
 };
 pub use taubin::{taubin_smooth, TAUBIN_LAMBDA, TAUBIN_MU};
 pub use trajectory::{keyframe_trajectory, smoothstep, SEGMENT_FRAMES};

@@ -2,7 +2,8 @@
 //! rendered head is found on every frame, the head's rotation is read to within a few degrees
 //! under the default ±40° / ±25° / ±15° motion, and the results file has every field the
 //! benchmark promises; a neutral head turned rigidly reads less expression with the rig's
-//! pose-leak table than without it.
+//! pose-leak table than without it, and a head that only talks reads less of the upper face
+//! with the mouth-leak table.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -19,6 +20,8 @@ const FRAMES: usize = 48;
 const RIGID_FRAMES: usize = 120;
 /// What the rigid turn's leak (99th percentile) must stay under with the table.
 const LEAK_BOUND: f64 = 0.2;
+/// The talking head's first row: where the take's range of motion works the jaw and lips.
+const TALKING_START: usize = 1600;
 
 /// The head renderer of ICT-FaceKit's identity 0 and the paths of the take and the model
 /// files.
@@ -141,5 +144,66 @@ fn a_rigid_turn_leaks_less_with_the_pose_leak_taken_off() {
     assert!(
         with < 0.9 * without && with < LEAK_BOUND,
         "rigid leak p99 {with} with the table, {without} without"
+    );
+}
+
+#[test]
+#[cfg_attr(
+    not(all(shared_data, model_files)),
+    ignore = "needs ../shared and the model files (scripts/setup.sh)"
+)]
+fn a_talking_head_reads_less_upper_face_with_the_mouth_leak_taken_off() {
+    let (render, take, models) = setup();
+    // Identity 0 (not among the table's training heads) plays the take's mouth alone, from
+    // its jaw and lip range of motion, under the default head motion: every fourth row.
+    let read = |keep_mouth_leak| {
+        let options = ExpressionOptions {
+            replay: ReplayOptions {
+                only: Some(
+                    (0..visage_rig::ARKIT_BLENDSHAPE_COUNT)
+                        .filter(|&i| visage_rig::is_mouth(i))
+                        .collect(),
+                ),
+                start: TALKING_START,
+                stride: 4,
+                max_frames: Some(RIGID_FRAMES),
+                ..ReplayOptions::default()
+            },
+            models: Some(models.clone()),
+            keep_mouth_leak,
+            ..ExpressionOptions::default()
+        };
+        let results = evaluate_expressions(std::slice::from_ref(&take), &render, &options).unwrap();
+        let curves = results.takes.into_iter().next().unwrap().curves;
+        assert!(curves
+            .played
+            .iter()
+            .all(|p| (0..p.len()).all(|i| visage_rig::is_mouth(i) || p[i] == 0.0)));
+        curves.read
+    };
+    let (without, with) = (read(true), read(false));
+    let total = |read: &[[f32; visage_rig::ARKIT_BLENDSHAPE_COUNT]], pick: fn(usize) -> bool| {
+        read.iter()
+            .flat_map(|r| {
+                r.iter()
+                    .enumerate()
+                    .filter(|(i, _)| pick(*i))
+                    .map(|(_, w)| f64::from(*w))
+            })
+            .sum::<f64>()
+    };
+    let (upper_without, upper_with) = (
+        total(&without, visage_rig::is_upper_face),
+        total(&with, visage_rig::is_upper_face),
+    );
+    eprintln!("upper face's weights summed over the frames: {upper_without:.2} without the table, {upper_with:.2} with it");
+    assert!(
+        upper_with < 0.8 * upper_without,
+        "{upper_with} against {upper_without}"
+    );
+    // The mouth's own weights are the same run for run.
+    assert_eq!(
+        total(&with, visage_rig::is_mouth),
+        total(&without, visage_rig::is_mouth)
     );
 }

@@ -53,6 +53,31 @@
 /// How many ARKit blendshapes there are.
 pub const ARKIT_BLENDSHAPE_COUNT: usize = 52;
 
+/// The start of a rig table's file (`PoseLeak`'s, `MouthLeak`'s): `magic`, `version` and the
+/// weight count, ARKit's 52 (all little-endian).
+pub(crate) fn table_header(magic: &[u8; 8], version: u32) -> Vec<u8> {
+    let mut out = magic.to_vec();
+    out.extend_from_slice(&version.to_le_bytes());
+    out.extend_from_slice(&(ARKIT_BLENDSHAPE_COUNT as u32).to_le_bytes());
+    out
+}
+
+/// Reads [`table_header`]'s fields; the error says which is wrong.
+pub(crate) fn read_table_header(
+    r: &mut visage_morphable::binary_reader::Reader,
+    magic: &[u8; 8],
+    version: u32,
+) -> Result<(), String> {
+    r.header(magic, version)?;
+    let weights = r.u32()? as usize;
+    if weights != ARKIT_BLENDSHAPE_COUNT {
+        return Err(format!(
+            "{weights} weights, expected {ARKIT_BLENDSHAPE_COUNT}"
+        ));
+    }
+    Ok(())
+}
+
 /// Apple's `ARFaceAnchor.BlendShapeLocation` names, in the Live Link Face CSV's column order.
 pub const ARKIT_BLENDSHAPES: [&str; ARKIT_BLENDSHAPE_COUNT] = [
     "eyeBlinkLeft",

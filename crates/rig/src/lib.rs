@@ -2,10 +2,10 @@
 //! morphable model (ICT-FaceKit's expressions, `visage-morphable`) and the irises, it makes
 //! the 52 ARKit blendshape weights ([`IctToArkit`], its name tables), the eyes'
 //! rotations ([`eye_gaze`], held through blinks by the [`LidGate`]), the lids from the eye
-//! network's contour ([`Eyelids`]: blink and wide eyes), measured from the
-//! person's resting face ([`RestPose`]) and less what the head's turn alone adds
-//! ([`PoseLeak`]), and the head's rotation, as one [`BlendshapeFrame`] per frame with Live Link
-//! Face's names and signs.
+//! network's contour ([`Eyelids`]: blink and wide eyes), measured from the person's resting
+//! face ([`RestPose`]) less what the head's turn alone adds ([`PoseLeak`]) and what the
+//! mouth's shapes alone add to the upper face's ([`MouthLeak`]), and the head's rotation, as
+//! one [`BlendshapeFrame`] per frame with Live Link Face's names and signs.
 
 #![forbid(unsafe_code)]
 
@@ -16,6 +16,7 @@ mod eyelids;
 mod gaze;
 mod histogram;
 mod lid_gate;
+mod mouth_leak;
 mod pose_leak;
 mod rest_pose;
 
@@ -37,5 +38,6 @@ pub use gaze::{
     EYE_LOOK_FULL_RAD, IRIS_ROTATION_RADIUS_M,
 };
 pub use lid_gate::{LidGate, HOLD_BLINK};
+pub use mouth_leak::{is_mouth, is_upper_face, MouthLeak};
 pub use pose_leak::{pose_leak_terms, LeakLearning, LeakSample, PoseLeak, POSE_LEAK_TERMS};
 pub use rest_pose::{lips_closed, RestPose, CLOSED_LIP_GAP, MIN_RANGE};

@@ -35,7 +35,7 @@
 
 use visage_morphable::binary_reader::Reader;
 
-use crate::arkit::ARKIT_BLENDSHAPE_COUNT;
+use crate::arkit::{read_table_header, table_header, ARKIT_BLENDSHAPE_COUNT};
 
 const EMBEDDED: &[u8] = include_bytes!("../data/pose_leak.bin");
 const MAGIC: &[u8; 8] = b"VSGLEAK\0";
@@ -251,10 +251,7 @@ impl PoseLeak {
     /// three angle limits (f32), then node by node the weights' leaks as 16-bit integers in
     /// units of 1 / 16384 (all little-endian).
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(40 + self.values.len() * ARKIT_BLENDSHAPE_COUNT * 2);
-        out.extend_from_slice(MAGIC);
-        out.extend_from_slice(&VERSION.to_le_bytes());
-        out.extend_from_slice(&(ARKIT_BLENDSHAPE_COUNT as u32).to_le_bytes());
+        let mut out = table_header(MAGIC, VERSION);
         for n in self.nodes {
             out.extend_from_slice(&(n as u32).to_le_bytes());
         }
@@ -270,13 +267,7 @@ impl PoseLeak {
     /// Parses [`PoseLeak::to_bytes`]' format; the error says what is wrong.
     pub fn parse(bytes: &[u8]) -> Result<PoseLeak, String> {
         let mut r = Reader::new(bytes);
-        r.header(MAGIC, VERSION)?;
-        let weights = r.u32()? as usize;
-        if weights != ARKIT_BLENDSHAPE_COUNT {
-            return Err(format!(
-                "{weights} weights, expected {ARKIT_BLENDSHAPE_COUNT}"
-            ));
-        }
+        read_table_header(&mut r, MAGIC, VERSION)?;
         let nodes = [r.u32()?, r.u32()?, r.u32()?].map(|n| n as usize);
         if nodes.iter().any(|n| !(2..=MAX_NODES).contains(n)) {
             return Err(format!(

@@ -180,6 +180,7 @@ pub struct Builder {
     pub(crate) fit: FitOptions,
     pub(crate) rest_pose: bool,
     pub(crate) pose_leak: bool,
+    pub(crate) mouth_leak: bool,
     pub(crate) landmark_smoothing: Option<f64>,
     pub(crate) latency: usize,
     pub(crate) fairing_length_mm: Option<f64>,
@@ -204,6 +205,7 @@ impl Default for Builder {
             fit: FitOptions::default(),
             rest_pose: true,
             pose_leak: true,
+            mouth_leak: true,
             landmark_smoothing: Some(DEFAULT_LANDMARK_SMOOTHING),
             latency: DEFAULT_LATENCY_FRAMES,
             fairing_length_mm: None,
@@ -226,6 +228,15 @@ impl Builder {
     /// given as the fit reads them (to learn that table).
     pub fn pose_leak(mut self, on: bool) -> Self {
         self.pose_leak = on;
+        self
+    }
+
+    /// Whether what the mouth's shapes alone add to the upper face's weights (the landmark
+    /// network's cross-talk: a sneer that follows speech), learned on renders of heads that
+    /// only talk (`visage_rig::MouthLeak`), is taken off (default, after the pose leak), or
+    /// the weights are given without it (to learn that table).
+    pub fn mouth_leak(mut self, on: bool) -> Self {
+        self.mouth_leak = on;
         self
     }
 

@@ -25,7 +25,7 @@ use visage_face::{
 };
 use visage_rig::EyeRig;
 use visage_rig::RestPose;
-use visage_rig::{BlendshapeFrame, IctToArkit, PoseLeak};
+use visage_rig::{BlendshapeFrame, IctToArkit, MouthLeak, PoseLeak};
 use visage_run_folder::LandmarksFrame;
 use visage_run_folder::{FrameMetrics, MeshSummary, Report, RunStatus, RunSummary, RunTiming};
 
@@ -279,6 +279,7 @@ impl Reconstructor {
             iris,
             rest: builder.rest_pose.then(|| RestPose::new(m)),
             pose_leak: builder.pose_leak.then(PoseLeak::embedded),
+            mouth_leak: builder.mouth_leak.then(MouthLeak::embedded),
             weights: Vec::with_capacity(m.expressions.len()),
             // A depth network is aligned to the fitted model's surface.
             surface: (uses_model || builder.depth.needs_reference()).then(|| Arc::clone(m)),

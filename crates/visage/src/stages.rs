@@ -27,7 +27,7 @@ use crate::Error;
 use visage_face::{face_jumped, CutDetector};
 use visage_face::{DistanceSmoother, LandmarkSmoother};
 use visage_rig::{lips_closed, RestPose};
-use visage_rig::{live_link_angles, BlendshapeFrame, IctToArkit, PoseLeak};
+use visage_rig::{live_link_angles, BlendshapeFrame, IctToArkit, MouthLeak, PoseLeak};
 use visage_rig::{EyeObservation, EyeRig, LidPoints};
 use visage_run_folder::{FaceRecord, LandmarksFrame};
 use visage_run_folder::{FrameMetrics, FrameQuality, FrameStatus, PoseMetrics};
@@ -105,6 +105,9 @@ pub(crate) struct ModelStage {
     pub rest: Option<RestPose>,
     /// What the head's turn alone adds to the weights, taken off them.
     pub pose_leak: Option<PoseLeak>,
+    /// What the mouth's shapes alone add to the upper face's weights, taken off them after the
+    /// pose leak.
+    pub mouth_leak: Option<MouthLeak>,
     /// Scratch: the calibrated weights.
     pub weights: Vec<f64>,
     /// The model, when its fitted surface is needed downstream (the model mesh or depth).
@@ -171,6 +174,9 @@ impl ModelStage {
         }
         if let Some(leak) = &self.pose_leak {
             leak.remove(b.head, &mut b.weights);
+        }
+        if let Some(leak) = &self.mouth_leak {
+            leak.remove(&mut b.weights);
         }
         metrics.model_fit_px = Some(fit.mean_error_px);
         if let Some(model) = &self.surface {

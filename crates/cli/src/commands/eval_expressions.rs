@@ -125,11 +125,13 @@ pub fn expressions(args: ExpressionsArgs) -> anyhow::Result<()> {
             start: args.start,
             stride: args.stride,
             max_frames: args.max_frames,
+            only: None,
         },
         models: args.models,
         save_frames: args.save_frames,
         frames_dir,
         keep_pose_leak: false,
+        keep_mouth_leak: false,
     };
     let render = HeadRender::load(&args.model, k, args.distance).with_context(|| {
         format!(
