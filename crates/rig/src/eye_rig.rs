@@ -14,6 +14,7 @@
 //! ahead.
 
 use visage_camera::{Intrinsics, RigidTransform};
+use visage_morphable::fit::view_correction::view_of;
 
 use crate::eyelids::{aperture, Eyelids, LidPoints, LidReading};
 use crate::gaze::{eye_gaze, eye_look_weights, EyeGaze};
@@ -63,7 +64,10 @@ impl EyeRig {
             readings[left as usize] = eye
                 .lids
                 .and_then(|lids| aperture(k, pose, eye.corners, &lids))
-                .map(|a| self.eyelids.read(left, a));
+                .map(|a| {
+                    self.eyelids
+                        .read(left, a, view_of(pose, centers[left as usize])[1])
+                });
         }
         // The eye turned away from the camera takes the other's lids as the turn grows.
         let far = far_eye(pose, centers);
