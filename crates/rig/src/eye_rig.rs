@@ -16,7 +16,7 @@
 use visage_camera::{Intrinsics, RigidTransform};
 use visage_morphable::fit::view_correction::view_of;
 
-use crate::eyelids::{aperture, Eyelids, LidPoints, LidReading};
+use crate::eyelids::{opening, Eyelids, LidPoints, LidReading};
 use crate::gaze::{eye_gaze, eye_look_weights, EyeGaze};
 use crate::lid_gate::LidGate;
 use crate::{BlendshapeFrame, RestPose, ARKIT_BLENDSHAPES};
@@ -63,10 +63,10 @@ impl EyeRig {
         for (left, eye) in [false, true].into_iter().zip(&eyes) {
             readings[left as usize] = eye
                 .lids
-                .and_then(|lids| aperture(k, pose, eye.corners, &lids))
-                .map(|a| {
+                .and_then(|lids| opening(k, pose, eye.corners, &lids))
+                .map(|o| {
                     self.eyelids
-                        .read(left, a, view_of(pose, centers[left as usize])[1])
+                        .read(left, o, view_of(pose, centers[left as usize]))
                 });
         }
         // The eye turned away from the camera takes the other's lids as the turn grows.

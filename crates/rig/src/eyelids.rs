@@ -26,6 +26,11 @@
 //!   every pitch. So the closed aperture is [`CLOSED_APERTURE`] head-on and from above, and
 //!   rises by [`CLOSED_PER_PITCH_BELOW`] per radian of the eye's view from below
 //!   ([`closed_aperture`]).
+//! - **A squint is not a blink**: a squint raises the lower lid and narrows the aperture as a
+//!   partial blink does, but a blink is the upper lid coming down. The upper lid's height
+//!   above the corners, corrected for the view ([`upper_lid_seen`]) and taken relative to the
+//!   person's open eye like the aperture, caps `eyeBlink`: an eye whose upper lid stays up
+//!   cannot read closed ([`UPPER_OPEN_EDGE`], [`UPPER_CLOSED`]).
 
 use visage_camera::{Intrinsics, RigidTransform};
 
@@ -81,6 +86,37 @@ pub const WIDE_FULL: f64 = 1.45;
 /// Apertures above this are out of the histogram's range (a wide-open eye is about 0.45).
 const MAX_APERTURE: f64 = 1.0;
 
+/// How the upper lid's height over the eye's width shows with the view, per unit of the sine
+/// of the eye's view pitch (camera above positive) and of its view yaw's size: the lid's centre
+/// lies in front of the corners, so seen from above it shows lower, and a turned eye's lids
+/// show closer to the corners' line. Both are the mean slopes of the open eyes' upper lids on
+/// renders of two identities playing `alex_rom_3` (right and left eyes: pitch 0.08–0.16, yaw
+/// 0.04–0.17; `docs/performance.md`, "a squint is not a blink").
+pub const UPPER_PER_PITCH: f64 = 0.12;
+pub const UPPER_PER_YAW: f64 = 0.11;
+
+/// The upper lid's height over the eye's width as if seen head-on, from [`LidOpening::upper`]
+/// seen at `view` (the eye's view yaw and pitch, radians).
+pub fn upper_lid_seen(upper: f64, view: [f64; 2]) -> f64 {
+    let [yaw, pitch] = view.map(|a| if a.is_finite() { a } else { 0.0 });
+    upper + UPPER_PER_PITCH * pitch.sin() + UPPER_PER_YAW * yaw.sin().abs()
+}
+
+/// Relative to the upper lid's open height: at or above [`UPPER_OPEN_EDGE`] the eye cannot
+/// read as blinking at all; `eyeBlink`'s cap falls linearly to 1 at [`UPPER_CLOSED`]. On the
+/// renders, the frame of each played blink's strongest closure has its upper lid at 0.45–0.53
+/// of the open height (median), at most 0.78–0.85; an eye that squints at 0.1–0.4 seen from
+/// 25–30° below and turned 35–40° keeps it at 0.5–0.9 while its aperture reads 0.4–0.6.
+pub const UPPER_OPEN_EDGE: f64 = 1.1;
+pub const UPPER_CLOSED: f64 = 0.6;
+
+/// The upper lid's open height is this quantile of its heights so far, never below
+/// [`MIN_OPEN_UPPER`] (an open eye's is 0.24–0.28 of the eye's width on the renders).
+const MIN_OPEN_UPPER: f64 = 0.13;
+
+/// Upper-lid heights above this are out of the histogram's range.
+const MAX_UPPER: f64 = 0.6;
+
 /// One eye's reading in a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LidReading {
@@ -92,20 +128,28 @@ pub struct LidReading {
     pub wide: f64,
 }
 
-/// The aperture of an eye: the upper to lower lid centre distance over the corners' distance,
-/// both measured along the face's own vertical and horizontal axes at the eye (the fitted head
+/// How far an eye's lids are apart, and where its upper lid is, both over the eye's width.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LidOpening {
+    /// The upper to lower lid centre distance.
+    pub aperture: f64,
+    /// The upper lid centre's height above the midpoint of the corners (negative below).
+    pub upper: f64,
+}
+
+/// The opening of an eye ([`LidOpening`]): the lids' distances measured along the face's own vertical and horizontal axes at the eye (the fitted head
 /// pose's axes projected through the camera), so turning or tilting the head does not open or
 /// close the eye. The outer corner lies about a centimetre behind the inner one, so their
 /// distance along the face's horizontal axis does not follow the head's turn exactly: it is
 /// scaled by how the fitted face's own corners, `corners` (model frame, metres; x to the
 /// face's left-to-right, y up), measure at this pose against their true distance. `pose` is the
 /// head's (model frame → camera). `None` when the eye is seen edge-on or the corners coincide.
-pub fn aperture(
+pub fn opening(
     k: &Intrinsics,
     pose: &RigidTransform,
     corners: [[f64; 3]; 2],
     lids: &LidPoints,
-) -> Option<f64> {
+) -> Option<LidOpening> {
     let eye_center: [f64; 3] = std::array::from_fn(|i| 0.5 * (corners[0][i] + corners[1][i]));
     let width = (0..3)
         .map(|i| (corners[1][i] - corners[0][i]).powi(2))
@@ -139,6 +183,11 @@ pub fn aperture(
     };
     let sub = |p: [f64; 2], q: [f64; 2]| [p[0] - q[0], p[1] - q[1]];
     let height = face_axes(sub(lids.upper, lids.lower))[1];
+    let mid = [
+        0.5 * (lids.corners[0][0] + lids.corners[1][0]),
+        0.5 * (lids.corners[0][1] + lids.corners[1][1]),
+    ];
+    let upper = face_axes(sub(lids.upper, mid))[1];
     let seen_width = face_axes(sub(lids.corners[1], lids.corners[0]))[0].abs();
     let [c0, c1] = corners.map(|x| k.project(pose.apply(x)));
     let model_width = face_axes(sub(c1, c0))[0].abs();
@@ -149,7 +198,12 @@ pub fn aperture(
     let share = ((turn - SEEN_WIDTH_UNTIL_DEG) / (FACE_WIDTH_FROM_DEG - SEEN_WIDTH_UNTIL_DEG))
         .clamp(0.0, 1.0);
     let width = (1.0 - share) * seen_width * scale + share * width;
-    (width > 0.0 && height.is_finite() && scale.is_finite()).then(|| height.max(0.0) / width)
+    (width > 0.0 && height.is_finite() && upper.is_finite() && scale.is_finite()).then(|| {
+        LidOpening {
+            aperture: height.max(0.0) / width,
+            upper: upper / width,
+        }
+    })
 }
 
 /// The eye's width is the one its contour's corners show, corrected for their depths, while
@@ -160,33 +214,42 @@ pub fn aperture(
 pub const SEEN_WIDTH_UNTIL_DEG: f64 = 15.0;
 pub const FACE_WIDTH_FROM_DEG: f64 = 30.0;
 
-/// Both eyes' open apertures so far (the subject's right eye, then the left).
+/// Both eyes' open apertures and upper lids so far (the subject's right eye, then the left).
 #[derive(Clone, Debug)]
 pub struct Eyelids {
     apertures: [Histogram; 2],
+    uppers: [Histogram; 2],
 }
 
 impl Default for Eyelids {
     fn default() -> Self {
         Eyelids {
             apertures: std::array::from_fn(|_| Histogram::new(0.0, MAX_APERTURE)),
+            uppers: std::array::from_fn(|_| Histogram::new(0.0, MAX_UPPER)),
         }
     }
 }
 
 impl Eyelids {
-    /// Adds the eye's aperture in this frame (`left`: the subject's left eye), seen at `pitch`
-    /// (radians, [`closed_aperture`]), and reads its blink and wide-eye weights relative to the
-    /// person's open eye.
-    pub fn read(&mut self, left: bool, aperture: f64, pitch: f64) -> LidReading {
+    /// Adds the eye's opening in this frame (`left`: the subject's left eye), seen at `view`
+    /// (the eye's view yaw and pitch, radians: [`closed_aperture`], [`upper_lid_seen`]), and
+    /// reads its blink and wide-eye weights relative to the person's open eye.
+    pub fn read(&mut self, left: bool, opening: LidOpening, view: [f64; 2]) -> LidReading {
         let hist = &mut self.apertures[left as usize];
-        hist.push(aperture);
+        hist.push(opening.aperture);
         let open = hist.quantile(OPEN_QUANTILE).max(MIN_OPEN_APERTURE);
-        let openness = aperture / open;
-        let closed = closed_aperture(pitch);
+        let openness = opening.aperture / open;
+        let closed = closed_aperture(view[1]);
+        let upper = upper_lid_seen(opening.upper, view);
+        let hist = &mut self.uppers[left as usize];
+        hist.push(upper);
+        let upper = upper / hist.quantile(OPEN_QUANTILE).max(MIN_OPEN_UPPER);
+        let cap = (UPPER_OPEN_EDGE - upper) / (UPPER_OPEN_EDGE - UPPER_CLOSED);
         LidReading {
             openness,
-            blink: ((OPEN_EDGE - openness) / (OPEN_EDGE - closed)).clamp(0.0, 1.0),
+            blink: ((OPEN_EDGE - openness) / (OPEN_EDGE - closed))
+                .clamp(0.0, 1.0)
+                .min(cap.clamp(0.0, 1.0)),
             wide: ((openness - WIDE_EDGE) / (WIDE_FULL - WIDE_EDGE)).clamp(0.0, 1.0),
         }
     }
@@ -226,8 +289,10 @@ mod tests {
         let (k, frontal) = frontal();
         // The lids 9 mm apart over the corners' distance in space.
         let expected = 0.009 / 0.03f64.hypot(0.01);
-        let a = aperture(&k, &frontal, CORNERS, &eye(&k, &frontal, 0.3)).unwrap();
-        assert!((a - expected).abs() < 1e-9, "{a}");
+        let o = opening(&k, &frontal, CORNERS, &eye(&k, &frontal, 0.3)).unwrap();
+        assert!((o.aperture - expected).abs() < 1e-9, "{o:?}");
+        // The lids are symmetric about the corners.
+        assert!((o.upper - 0.5 * expected).abs() < 1e-9, "{o:?}");
         for (yaw, pitch) in [(0.6f64, 0.0f64), (0.0, 0.4), (-0.5, -0.3)] {
             let (cy, sy, cp, sp) = (yaw.cos(), yaw.sin(), pitch.cos(), pitch.sin());
             let turn = [[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]];
@@ -242,9 +307,16 @@ mod tests {
                 translation: [0.02, -0.01, 0.5],
             };
             let lids = eye(&k, &pose, 0.3);
-            let a = aperture(&k, &pose, CORNERS, &lids).unwrap();
+            let o = opening(&k, &pose, CORNERS, &lids).unwrap();
             // Perspective bends the small eye only slightly.
-            assert!((a - expected).abs() < 0.01, "yaw {yaw} pitch {pitch}: {a}");
+            assert!(
+                (o.aperture - expected).abs() < 0.01,
+                "yaw {yaw} pitch {pitch}: {o:?}"
+            );
+            assert!(
+                (o.upper - 0.5 * expected).abs() < 0.01,
+                "yaw {yaw} pitch {pitch}: {o:?}"
+            );
             // The image ratio alone does change.
             let d = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
             let image = d(lids.upper, lids.lower) / d(lids.corners[0], lids.corners[1]);
@@ -254,6 +326,18 @@ mod tests {
             );
         }
     }
+
+    /// An eye `aperture` open, its lids symmetric about the corners head-on, as seen at `view`
+    /// ([`upper_lid_seen`]'s inverse).
+    fn seen(aperture: f64, view: [f64; 2]) -> LidOpening {
+        let upper = 0.5 * aperture;
+        LidOpening {
+            aperture,
+            upper: upper - (upper_lid_seen(upper, view) - upper),
+        }
+    }
+
+    const HEAD_ON: [f64; 2] = [0.0, 0.0];
 
     #[test]
     fn a_closed_eye_blinks_an_open_one_does_not_and_a_wide_one_widens() {
@@ -265,39 +349,72 @@ mod tests {
             } else {
                 0.33 * (1.0 + 0.03 * ((i % 3) as f64 - 1.0))
             };
-            let r = lids.read(false, a, 0.0);
+            let r = lids.read(false, seen(a, HEAD_ON), HEAD_ON);
             if i > 20 && i % 50 != 0 {
                 assert!(r.blink < 0.05 && r.wide == 0.0, "frame {i}: {r:?}");
             }
         }
-        let closed = lids.read(false, 0.1, 0.0);
+        let closed = lids.read(false, seen(0.1, HEAD_ON), HEAD_ON);
         assert!(closed.blink > 0.95, "{closed:?}");
-        let half = lids.read(false, 0.2, 0.0);
+        let half = lids.read(false, seen(0.2, HEAD_ON), HEAD_ON);
         assert!(half.blink > 0.3 && half.blink < 0.7, "{half:?}");
-        let wide = lids.read(false, 0.5, 0.0);
+        let wide = lids.read(false, seen(0.5, HEAD_ON), HEAD_ON);
         assert!(wide.wide > 0.9 && wide.blink == 0.0, "{wide:?}");
-        // The other eye has its own calibration: nothing seen yet, so the floor holds.
-        assert!(lids.read(true, 0.05, 0.0).blink > 0.95);
+        // The other eye has its own calibration: nothing seen yet, so the floors hold.
+        assert!(lids.read(true, seen(0.05, HEAD_ON), HEAD_ON).blink > 0.95);
+    }
+
+    #[test]
+    fn a_squint_narrows_the_eye_without_closing_it() {
+        let mut lids = Eyelids::default();
+        for _ in 0..100 {
+            lids.read(false, seen(0.33, HEAD_ON), HEAD_ON);
+        }
+        // 0.45 of the open aperture: the lower lid risen past the corners' line and the upper
+        // lid where it was (a squint), or the upper lid come down (a blink).
+        let squint = LidOpening {
+            aperture: 0.45 * 0.33,
+            upper: 0.5 * 0.33,
+        };
+        let blink = LidOpening {
+            aperture: 0.45 * 0.33,
+            upper: 0.0,
+        };
+        let r = lids.read(false, squint, HEAD_ON);
+        assert!(r.blink < 0.25, "{r:?}");
+        let r = lids.read(false, blink, HEAD_ON);
+        assert!(r.blink > 0.85, "{r:?}");
+        // The upper lid part way down caps the blink part way.
+        let between = LidOpening {
+            aperture: 0.45 * 0.33,
+            upper: 0.5 * (UPPER_OPEN_EDGE + UPPER_CLOSED) * 0.5 * 0.33,
+        };
+        let r = lids.read(false, between, HEAD_ON);
+        assert!((r.blink - 0.5).abs() < 0.05, "{r:?}");
     }
 
     #[test]
     fn a_nearly_closed_eye_seen_from_below_reads_more_closed() {
         let mut lids = Eyelids::default();
         for _ in 0..100 {
-            lids.read(false, 0.33, 0.0);
+            lids.read(false, seen(0.33, HEAD_ON), HEAD_ON);
         }
         // 0.55 of the open aperture: a closed eye seen from 25° below, half closed head-on
         // and from above.
-        let below = lids.read(false, 0.55 * 0.33, -0.44);
-        let head_on = lids.read(false, 0.55 * 0.33, 0.0);
-        let above = lids.read(false, 0.55 * 0.33, 0.44);
+        let at = |lids: &mut Eyelids, pitch| {
+            lids.read(false, seen(0.55 * 0.33, [0.0, pitch]), [0.0, pitch])
+        };
+        let below = at(&mut lids, -0.44);
+        let head_on = at(&mut lids, 0.0);
+        let above = at(&mut lids, 0.44);
         assert!(below.blink > 0.95, "{below:?}");
         assert!(head_on.blink > 0.5 && head_on.blink < 0.8, "{head_on:?}");
         assert_eq!(above.blink, head_on.blink);
         // An open eye stays open from any view, and the view past the renders' range counts
         // as their edge.
         for pitch in [-1.0, -0.44, 0.44, 1.0, f64::NAN] {
-            assert_eq!(lids.read(false, 0.33, pitch).blink, 0.0);
+            let view = [0.3, pitch];
+            assert_eq!(lids.read(false, seen(0.33, view), view).blink, 0.0);
         }
         assert_eq!(closed_aperture(-1.0), closed_aperture(-0.44));
         assert_eq!(closed_aperture(f64::NAN), CLOSED_APERTURE);
@@ -308,7 +425,7 @@ mod tests {
     fn a_clip_that_starts_with_closed_eyes_reads_them_closed() {
         let mut lids = Eyelids::default();
         for _ in 0..100 {
-            let r = lids.read(false, 0.08, 0.0);
+            let r = lids.read(false, seen(0.08, HEAD_ON), HEAD_ON);
             assert!(r.blink > 0.6, "{r:?}");
         }
     }

@@ -30,8 +30,9 @@ pub use blendshape_frame::{
 };
 pub use eye_rig::{EyeObservation, EyeRig, FAR_EYE_FROM_DEG, FAR_EYE_FULL_DEG};
 pub use eyelids::{
-    aperture, closed_aperture, Eyelids, LidPoints, LidReading, CLOSED_APERTURE,
-    CLOSED_PER_PITCH_BELOW, MIN_OPEN_APERTURE, OPEN_EDGE, OPEN_QUANTILE, WIDE_EDGE, WIDE_FULL,
+    closed_aperture, opening, upper_lid_seen, Eyelids, LidOpening, LidPoints, LidReading,
+    CLOSED_APERTURE, CLOSED_PER_PITCH_BELOW, MIN_OPEN_APERTURE, OPEN_EDGE, OPEN_QUANTILE,
+    UPPER_CLOSED, UPPER_OPEN_EDGE, UPPER_PER_PITCH, UPPER_PER_YAW, WIDE_EDGE, WIDE_FULL,
 };
 pub use gaze::{
     eye_gaze, eye_look_gaze, eye_look_weights, EyeGaze, CONTOUR_CORNERS_OFFSET_M, EYEBALL_DEPTH_M,
