@@ -11,7 +11,7 @@
 //!   measured along the face's own vertical and horizontal axes at the eye (the fitted head
 //!   pose's axes projected through the camera; the corners' distance corrected for their
 //!   depths on the fitted face), so turning or tilting the head does not open or close the eye
-//!   ([`aperture`]).
+//!   ([`opening`]).
 //! - **Calibration per person**: the eye's open aperture is the [`OPEN_QUANTILE`] of its
 //!   apertures so far (a face's eyes are open most of the time, and a high quantile still holds
 //!   when they are closed for long stretches), but never below [`MIN_OPEN_APERTURE`] (a clip
