@@ -5,8 +5,10 @@
 //!
 //! As the head turns away, the eye on the far side is seen ever more obliquely, partly behind
 //! the nose, and its contour's lids and its iris drift: from [`FAR_EYE_FROM_DEG`] of turn it
-//! takes the near eye's lids and gaze, wholly from [`FAR_EYE_FULL_DEG`] (a wink of the far eye,
-//! and the eyes' vergence, are then lost).
+//! takes the near eye's lids and gaze, wholly from [`FAR_EYE_FULL_DEG`] (the eyes' vergence is
+//! then lost). A wink of the far eye keeps its own lids: while the far eye reads clearly closed
+//! (its aperture under [`WINK_OPENNESS`] of its open one, its upper lid under [`WINK_UPPER`] of
+//! its open height) and the near eye reads open.
 //!
 //! Blinks are bilateral and the eyes turn together, so the gate holds both eyes' gazes while
 //! either eye's lid covers its iris: a closing lid pushes the iris the network finds down
@@ -73,12 +75,16 @@ impl EyeRig {
         let far = far_eye(pose, centers);
         if let (Some((far, share)), [Some(right), Some(left)]) = (far, readings) {
             let (f, n) = if far { (left, right) } else { (right, left) };
+            let wink = f.openness < WINK_OPENNESS && f.upper < WINK_UPPER && n.blink < WINK_NEAR;
             let mix = |a: f64, b: f64| (1.0 - share) * a + share * b;
-            readings[far as usize] = Some(LidReading {
-                openness: mix(f.openness, n.openness),
-                blink: mix(f.blink, n.blink),
-                wide: mix(f.wide, n.wide),
-            });
+            if !wink {
+                readings[far as usize] = Some(LidReading {
+                    openness: mix(f.openness, n.openness),
+                    upper: mix(f.upper, n.upper),
+                    blink: mix(f.blink, n.blink),
+                    wide: mix(f.wide, n.wide),
+                });
+            }
         }
         let mut blinks = [0.0; 2];
         for (left, reading) in [false, true].into_iter().zip(readings) {
@@ -152,6 +158,15 @@ impl EyeRig {
 /// other eye's lids, and at which it takes them wholly.
 pub const FAR_EYE_FROM_DEG: f64 = 15.0;
 pub const FAR_EYE_FULL_DEG: f64 = 30.0;
+
+/// A far eye reading under this of its open aperture, with its upper lid under [`WINK_UPPER`]
+/// of its open height, while the near eye's blink is under [`WINK_NEAR`], winks: it keeps its
+/// own lids. Both well inside a closed eye's readings (the closed aperture is 0.4 or more; a
+/// blink's strongest frame has the upper lid at 0.45–0.53 of open at the median): the far
+/// eye's lids drift, and an open far eye at 30–45° of turn reads down to 0.3 of its aperture.
+pub const WINK_OPENNESS: f64 = 0.3;
+pub const WINK_UPPER: f64 = 0.45;
+pub const WINK_NEAR: f64 = 0.1;
 
 /// The eye turned away from the camera (`true`: the subject's left) and how much of the other
 /// eye's lids it takes, for a head at `pose` with its eyes' centres at `centers` (`[right,
@@ -280,6 +295,61 @@ mod tests {
         // The far eye is the one farther from the camera.
         let depth = |yaw: f64, eye: usize| posed(yaw).apply(centers[eye])[2];
         assert!(depth(40.0, far as usize) > depth(40.0, !far as usize));
+    }
+
+    #[test]
+    fn the_eye_turned_away_keeps_a_wink_and_takes_the_near_eye_lids_otherwise() {
+        let k = Intrinsics::new(640, 480, 500.0, 500.0, 320.0, 240.0).unwrap();
+        let (c, s) = (40f64.to_radians().cos(), 40f64.to_radians().sin());
+        let yaw = [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]];
+        let frontal = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
+        let pose = RigidTransform {
+            rotation: std::array::from_fn(|i| {
+                std::array::from_fn(|j| (0..3).map(|k| frontal[i][k] * yaw[k][j]).sum())
+            }),
+            translation: [0.0, 0.0, 0.5],
+        };
+        let centers = [[-0.03, 0.0, 0.0], [0.03, 0.0, 0.0]];
+        let (far, _) = far_eye(&pose, centers).unwrap();
+        // Each eye's upper and lower lids `[up, down]` metres from its corners' line.
+        let eyes = |lids: [[f64; 2]; 2]| {
+            std::array::from_fn(|e| {
+                let x = centers[e][0];
+                let p = |x: f64, y: f64| k.project(pose.apply([x, y, 0.0]));
+                let [up, down] = lids[e];
+                EyeObservation {
+                    lids: Some(LidPoints {
+                        upper: p(x, up),
+                        lower: p(x, -down),
+                        corners: [p(x - 0.015, 0.0), p(x + 0.015, 0.0)],
+                    }),
+                    iris_px: p(x, 0.0),
+                    corners: [[x - 0.015, 0.0, 0.0], [x + 0.015, 0.0, 0.0]],
+                }
+            })
+        };
+        let open = [0.006, 0.004];
+        let mut rig = EyeRig::default();
+        for i in 0..30 {
+            let mut f = BlendshapeFrame::new(i, 0.0);
+            rig.apply(&k, &pose, eyes([open; 2]), None, &mut f);
+        }
+        let blinks = |rig: &mut EyeRig, far_lids: [f64; 2]| {
+            let mut lids = [open; 2];
+            lids[far as usize] = far_lids;
+            let mut f = BlendshapeFrame::new(30, 0.0);
+            rig.apply(&k, &pose, eyes(lids), None, &mut f);
+            [far, !far].map(|left| get(&f, "eyeBlink", left))
+        };
+        // The far eye shut, its upper lid down to its lower one: a wink, kept.
+        let [far_blink, near_blink] = blinks(&mut rig, [-0.0035, 0.004]);
+        assert!(
+            far_blink > 0.95 && near_blink < 0.05,
+            "{far_blink} {near_blink}"
+        );
+        // Half shut (its lids drift as it turns away): the near eye's open lids.
+        let [far_blink, _] = blinks(&mut rig, [0.003, 0.002]);
+        assert!(far_blink < 0.05, "{far_blink}");
     }
 
     #[test]

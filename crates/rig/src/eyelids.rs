@@ -69,8 +69,9 @@ pub const CLOSED_APERTURE: f64 = 0.4;
 /// closures of 0.81 seen from 20° above fell under the benchmark's bar), so it stays.
 pub const CLOSED_PER_PITCH_BELOW: f64 = 0.35;
 
-/// The view pitch (radians) past which the closed aperture stops rising: the renders' range.
-const CLOSED_PITCH_RANGE: f64 = 0.44;
+/// The view pitch (radians) past which the closed aperture stops rising: the lowest view of an
+/// eye in the renders (37°; the head tilted back by 25° and the eye above the camera's axis).
+const CLOSED_PITCH_RANGE: f64 = 0.65;
 
 /// The closed aperture relative to the open one, for an eye seen at `pitch` (radians, the
 /// camera above the eye positive: a head bowed toward the camera; below it negative).
@@ -122,6 +123,8 @@ const MAX_UPPER: f64 = 0.6;
 pub struct LidReading {
     /// The aperture over the eye's open aperture.
     pub openness: f64,
+    /// The upper lid's height ([`upper_lid_seen`]) over its open height.
+    pub upper: f64,
     /// ARKit's `eyeBlink` of the eye, [0, 1].
     pub blink: f64,
     /// ARKit's `eyeWide` of the eye, [0, 1].
@@ -247,6 +250,7 @@ impl Eyelids {
         let cap = (UPPER_OPEN_EDGE - upper) / (UPPER_OPEN_EDGE - UPPER_CLOSED);
         LidReading {
             openness,
+            upper,
             blink: ((OPEN_EDGE - openness) / (OPEN_EDGE - closed))
                 .clamp(0.0, 1.0)
                 .min(cap.clamp(0.0, 1.0)),
@@ -416,7 +420,8 @@ mod tests {
             let view = [0.3, pitch];
             assert_eq!(lids.read(false, seen(0.33, view), view).blink, 0.0);
         }
-        assert_eq!(closed_aperture(-1.0), closed_aperture(-0.44));
+        assert_eq!(closed_aperture(-1.0), closed_aperture(-CLOSED_PITCH_RANGE));
+        assert!(closed_aperture(-0.6) > closed_aperture(-0.44));
         assert_eq!(closed_aperture(f64::NAN), CLOSED_APERTURE);
         assert_eq!(closed_aperture(0.3), CLOSED_APERTURE);
     }

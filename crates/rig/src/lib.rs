@@ -28,7 +28,10 @@ pub use blendshape_frame::{
     live_link_angles, live_link_rotation, BlendshapeFrame, BlendshapeTrack, LIVE_LINK_BLENDSHAPES,
     LIVE_LINK_ROTATIONS, LIVE_LINK_VALUE_COUNT,
 };
-pub use eye_rig::{EyeObservation, EyeRig, FAR_EYE_FROM_DEG, FAR_EYE_FULL_DEG};
+pub use eye_rig::{
+    EyeObservation, EyeRig, FAR_EYE_FROM_DEG, FAR_EYE_FULL_DEG, WINK_NEAR, WINK_OPENNESS,
+    WINK_UPPER,
+};
 pub use eyelids::{
     closed_aperture, opening, upper_lid_seen, Eyelids, LidOpening, LidPoints, LidReading,
     CLOSED_APERTURE, CLOSED_PER_PITCH_BELOW, MIN_OPEN_APERTURE, OPEN_EDGE, OPEN_QUANTILE,
