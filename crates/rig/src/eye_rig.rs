@@ -238,6 +238,20 @@ mod tests {
         (k, pose, obs)
     }
 
+    /// A head 0.5 m in front of the camera, turned by `yaw_deg` about its own vertical axis.
+    fn turned(yaw_deg: f64) -> RigidTransform {
+        let (c, s) = (yaw_deg.to_radians().cos(), yaw_deg.to_radians().sin());
+        // Model → camera: a half turn about x (frontal), after a turn about the model's y.
+        let yaw = [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]];
+        let frontal = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
+        RigidTransform {
+            rotation: std::array::from_fn(|i| {
+                std::array::from_fn(|j| (0..3).map(|k| frontal[i][k] * yaw[k][j]).sum())
+            }),
+            translation: [0.0, 0.0, 0.5],
+        }
+    }
+
     fn look_down(f: &BlendshapeFrame, left: bool) -> f64 {
         get(f, "eyeLookDown", left)
     }
@@ -275,40 +289,20 @@ mod tests {
     #[test]
     fn the_eye_turned_away_takes_the_near_eye_lids_as_the_head_turns() {
         let centers = [[-0.03, 0.0, 0.0], [0.03, 0.0, 0.0]];
-        let posed = |yaw_deg: f64| {
-            let (c, s) = (yaw_deg.to_radians().cos(), yaw_deg.to_radians().sin());
-            // Model → camera: a half turn about x (frontal), after a turn about the model's y.
-            let yaw = [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]];
-            let frontal = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
-            RigidTransform {
-                rotation: std::array::from_fn(|i| {
-                    std::array::from_fn(|j| (0..3).map(|k| frontal[i][k] * yaw[k][j]).sum())
-                }),
-                translation: [0.0, 0.0, 0.5],
-            }
-        };
-        assert_eq!(far_eye(&posed(5.0), centers), None);
-        let (far, share) = far_eye(&posed(40.0), centers).unwrap();
+        assert_eq!(far_eye(&turned(5.0), centers), None);
+        let (far, share) = far_eye(&turned(40.0), centers).unwrap();
         assert_eq!(share, 1.0);
-        let (other, half) = far_eye(&posed(-22.5), centers).unwrap();
+        let (other, half) = far_eye(&turned(-22.5), centers).unwrap();
         assert!(far != other && (half - 0.5).abs() < 0.05, "{half}");
         // The far eye is the one farther from the camera.
-        let depth = |yaw: f64, eye: usize| posed(yaw).apply(centers[eye])[2];
+        let depth = |yaw: f64, eye: usize| turned(yaw).apply(centers[eye])[2];
         assert!(depth(40.0, far as usize) > depth(40.0, !far as usize));
     }
 
     #[test]
     fn the_eye_turned_away_keeps_a_wink_and_takes_the_near_eye_lids_otherwise() {
         let k = Intrinsics::new(640, 480, 500.0, 500.0, 320.0, 240.0).unwrap();
-        let (c, s) = (40f64.to_radians().cos(), 40f64.to_radians().sin());
-        let yaw = [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]];
-        let frontal = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
-        let pose = RigidTransform {
-            rotation: std::array::from_fn(|i| {
-                std::array::from_fn(|j| (0..3).map(|k| frontal[i][k] * yaw[k][j]).sum())
-            }),
-            translation: [0.0, 0.0, 0.5],
-        };
+        let pose = turned(40.0);
         let centers = [[-0.03, 0.0, 0.0], [0.03, 0.0, 0.0]];
         let (far, _) = far_eye(&pose, centers).unwrap();
         // Each eye's upper and lower lids `[up, down]` metres from its corners' line.
@@ -356,15 +350,7 @@ mod tests {
     fn the_eye_turned_away_follows_the_near_eye_gaze() {
         use crate::gaze::{EYEBALL_DEPTH_M, IRIS_ROTATION_RADIUS_M};
         let k = Intrinsics::new(640, 480, 500.0, 500.0, 320.0, 240.0).unwrap();
-        let (c, s) = (40f64.to_radians().cos(), 40f64.to_radians().sin());
-        let yaw = [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]];
-        let frontal = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
-        let pose = RigidTransform {
-            rotation: std::array::from_fn(|i| {
-                std::array::from_fn(|j| (0..3).map(|k| frontal[i][k] * yaw[k][j]).sum())
-            }),
-            translation: [0.0, 0.0, 0.5],
-        };
+        let pose = turned(40.0);
         let centers = [[-0.03, 0.0, 0.0], [0.03, 0.0, 0.0]];
         let (far, share) = far_eye(&pose, centers).unwrap();
         assert_eq!(share, 1.0);
