@@ -106,13 +106,13 @@ pub fn upper_lid_seen(upper: f64, view: [f64; 2]) -> f64 {
 /// Relative to the upper lid's open height: at or above [`UPPER_OPEN_EDGE`] the eye cannot
 /// read as blinking at all; `eyeBlink`'s cap falls linearly to 1 at [`UPPER_CLOSED`]. On the
 /// renders, the frame of each played blink's strongest closure has its upper lid at 0.45–0.53
-/// of the open height (median), at most 0.78–0.85; an eye that squints at 0.1–0.4 seen from
-/// 25–30° below and turned 35–40° keeps it at 0.5–0.9 while its aperture reads 0.4–0.6.
+/// of the open height (median), at most 0.78–0.85; an eye that squints at 0.2–0.6 seen from
+/// 25–30° below and turned 30–42° keeps it at 0.5–0.9 while its aperture reads 0.3–0.7.
 pub const UPPER_OPEN_EDGE: f64 = 1.1;
 pub const UPPER_CLOSED: f64 = 0.6;
 
-/// The upper lid's open height is this quantile of its heights so far, never below
-/// [`MIN_OPEN_UPPER`] (an open eye's is 0.24–0.28 of the eye's width on the renders).
+/// The upper lid's open height is the [`OPEN_QUANTILE`] of its heights so far, never below this
+/// (an open eye's is 0.24–0.28 of the eye's width on the renders).
 const MIN_OPEN_UPPER: f64 = 0.13;
 
 /// Upper-lid heights above this are out of the histogram's range.
