@@ -54,6 +54,10 @@ pub struct ShapeScore {
     /// ([`crate::expression_scores::from_rest`]): what a reading relative to the person's rest
     /// — the pipeline's — can return.
     pub mae_from_rest: Option<f64>,
+    /// The MAE of a perfect reading relative to the person's rest: the played weight relative
+    /// to the take's resting value against the played weight. No reading relative to the rest
+    /// (the pipeline's, Live Link Face's once calibrated) can score a lower `mae`.
+    pub mae_floor: Option<f64>,
     /// Pearson's r of read against played (`None` where either is constant).
     pub r: Option<f64>,
     /// The 99th percentile of this weight's change over the frames at rest
@@ -70,6 +74,9 @@ pub struct ExpressionSummary {
     /// The same against the played weights relative to each take's resting values
     /// ([`ShapeScore::mae_from_rest`]).
     pub mae_from_rest: Option<f64>,
+    /// The lowest `mae` a reading relative to the person's rest can score
+    /// ([`ShapeScore::mae_floor`]).
+    pub mae_floor: Option<f64>,
     /// Blinks caught: runs of frames with a played `eyeBlink*` ≥ 0.8 in which the read one
     /// reaches 0.6 (both eyes).
     pub blink_hit_rate: Option<f64>,
@@ -198,6 +205,7 @@ pub fn evaluate_expressions(
     let summary = ExpressionSummary {
         mae: mean_mae(&shapes, |s| s.mae),
         mae_from_rest: mean_mae(&shapes, |s| s.mae_from_rest),
+        mae_floor: mean_mae(&shapes, |s| s.mae_floor),
         blink_hit_rate: blinks.hit_rate(),
         false_closure_rate: blinks.false_closure_rate(),
         blinks,
@@ -319,6 +327,7 @@ fn evaluate_take(
     let summary = ExpressionSummary {
         mae: mean_mae(&shapes, |s| s.mae),
         mae_from_rest: mean_mae(&shapes, |s| s.mae_from_rest),
+        mae_floor: mean_mae(&shapes, |s| s.mae_floor),
         blink_hit_rate: blinks.hit_rate(),
         false_closure_rate: blinks.false_closure_rate(),
         blinks,
@@ -366,6 +375,7 @@ fn shape_scores(curves: &Curves, rest: Option<&[usize]>) -> BTreeMap<String, Sha
                 ShapeScore {
                     mae: mae(&played, &read),
                     mae_from_rest: mae(&relative, &read),
+                    mae_floor: mae(&played, &relative),
                     r: pearson(&played, &read),
                     leak_p99,
                 },
@@ -419,4 +429,34 @@ fn identity_error(
         return Ok(None);
     }
     Ok(aligned_rms(&fitted[narrow.clone()], &truth[narrow]).map(|m| m * 1e3))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_perfect_reading_relative_to_the_rest_scores_the_floor() {
+        // A take resting at 0.3 of one shape, which rises to 1.0 for a quarter of its frames.
+        let played: Vec<[f32; ARKIT_BLENDSHAPE_COUNT]> = (0..40)
+            .map(|f| {
+                let mut w = [0.0; ARKIT_BLENDSHAPE_COUNT];
+                w[0] = if f % 4 == 0 { 1.0 } else { 0.3 };
+                w
+            })
+            .collect();
+        let relative = from_rest(&played);
+        let curves = Curves {
+            played_from_rest: relative.clone(),
+            read: relative,
+            played,
+            ..Curves::default()
+        };
+        let s = shape_scores(&curves, None)[ARKIT_BLENDSHAPES[0]];
+        assert_eq!(s.mae_from_rest, Some(0.0));
+        // Rest frames are 0.3 off, the rest not at all: 0.3 × 3/4.
+        let floor = s.mae_floor.unwrap();
+        assert!((floor - 0.225).abs() < 1e-6, "{floor}");
+        assert_eq!(s.mae, s.mae_floor);
+    }
 }

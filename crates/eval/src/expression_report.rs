@@ -164,6 +164,12 @@ pub fn expression_table(results: &ExpressionResults) -> String {
         s,
         "(MAE rest: against the played weights relative to the take's resting values)"
     );
+    if let Some(floor) = results.summary.mae_floor {
+        let _ = writeln!(
+            s,
+            "(a perfect reading relative to the rest would score MAE {floor:.4}: the takes' resting values)"
+        );
+    }
     if let Some((name, v)) = &results.summary.rigid_leak_worst {
         let _ = writeln!(s, "largest leak: {name} (p99 {v:.3})");
     }

@@ -90,6 +90,7 @@ fn a_take_replayed_on_a_rendered_head_is_read_frame_by_frame() {
     for field in [
         "mae",
         "mae_from_rest",
+        "mae_floor",
         "blink_hit_rate",
         "false_closure_rate",
         "rigid_leak_p99",
@@ -104,6 +105,7 @@ fn a_take_replayed_on_a_rendered_head_is_read_frame_by_frame() {
     let jaw = &json["takes"][0]["shapes"]["jawOpen"];
     assert!(jaw["mae"].is_number() && jaw.get("r").is_some(), "{jaw}");
     assert!(jaw["mae_from_rest"].is_number(), "{jaw}");
+    assert!(jaw["mae_floor"].is_number(), "{jaw}");
     let plot: PathBuf = out.path().join("plots/alex_rom_3/jawOpen.svg");
     assert!(std::fs::read_to_string(plot).unwrap().starts_with("<svg"));
 }
