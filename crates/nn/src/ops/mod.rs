@@ -26,7 +26,7 @@ mod transform_landmarks;
 mod transform_tensor_bilinear;
 mod window;
 
-pub use conv2d::{conv2d, Conv2dWeights};
+pub use conv2d::{conv2d, conv2d_scratch_len, Conv2dWeights};
 pub use depth_to_space::depth_to_space;
 pub use depthwise_conv2d::depthwise_conv2d;
 pub use elementwise::{add, add_prelu, mul, prelu, relu, Activation};

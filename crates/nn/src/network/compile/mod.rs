@@ -75,7 +75,9 @@ impl Network {
         let scratch_len = steps
             .iter()
             .map(|s| match s {
-                Step::Conv { win, wts, .. } => win.k_h * win.k_w * wts.c_in,
+                Step::Conv { win, wts, .. } => {
+                    crate::ops::conv2d_scratch_len(win.k_h, win.k_w, wts.c_in)
+                }
                 _ => 0,
             })
             .max()
