@@ -253,7 +253,7 @@ mod avx2 {
         // Blocks of `$n` columns while they last: `$n` independent multiply-add chains.
         macro_rules! sweep {
             ($n:expr) => {
-                while p + $n <= at.n {
+                while at.n - p >= $n {
                     let xb = at.x0 + p * step;
                     let mut acc = [bias; $n];
                     for ky in 0..3 {
