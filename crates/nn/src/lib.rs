@@ -12,8 +12,8 @@
 //!
 //! | TFLite operator | kernel |
 //! |---|---|
-//! | `CONV_2D` | [`ops::conv2d`]: 1×1 stride-1 as a register-blocked GEMM (4 pixels × 16/8/4 output channels; with AVX2+FMA 6 pixels × 16 channels in explicit vector code), other sizes read in place where the window is inside the input and through a small im2col at the border; with AVX-512 every pixel through one 12-pixel × 32-channel block over weights packed in 32-channel panels; fused `RELU` applied to the register block before the store |
-//! | `DEPTHWISE_CONV_2D` | [`ops::depthwise_conv2d`] (depth multiplier 1; 3×3 interior rows with the nine weight vectors in registers; with AVX2+FMA four columns × eight channels in explicit vector code; with AVX-512 eight columns × 16 channels, and the border pixels in 16-channel vectors) |
+//! | `CONV_2D` | [`ops::conv2d`]: 1×1 stride-1 as a register-blocked GEMM (4 pixels × 16/8/4 output channels; with AVX2+FMA 6 pixels × 16 channels in explicit vector code), other sizes read in place where the window is inside the input and through a small im2col at the border (with AVX2+FMA and 32 output channels or more, every pixel's window gathered, 6 pixels at a time, for the same 6 × 16 kernel); with AVX-512 every pixel through one 12-pixel × 32-channel block over weights packed in 32-channel panels; fused `RELU` applied to the register block before the store |
+//! | `DEPTHWISE_CONV_2D` | [`ops::depthwise_conv2d`] (depth multiplier 1; 3×3 interior rows with the nine weight vectors in registers; with AVX2+FMA six columns × eight channels in explicit vector code; with AVX-512 eight columns × 16 channels, and the border pixels in 16-channel vectors) |
 //! | `MAX_POOL_2D` | [`ops::max_pool2d`] (like `ADD` and `PRELU`, compiled apart for AVX2: [`ops::separately`]) |
 //! | `PAD` | [`ops::pad4`] (constant int32 paddings) |
 //! | `ADD` | [`ops::add`] (same shapes, no broadcasting; optional fused `RELU`) |
