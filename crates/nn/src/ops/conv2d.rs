@@ -110,16 +110,11 @@ pub fn conv2d<M: Madd>(
                 .chunks_exact_mut(avx2::ROWS * co)
                 .zip(x[..n * ci].chunks_exact(avx2::ROWS * ci))
             {
-                let mut ob = 0;
-                while ob + 16 <= co {
-                    // SAFETY: the CPU has AVX2 and FMA (tested above).
-                    #[allow(unsafe_code)]
-                    unsafe {
-                        avx2::gemm_x16(xb, red, &wts.w, &wts.bias, ob, relu, yb)
-                    };
-                    ob += 16;
-                }
-                gemm_rows::<M, { avx2::ROWS }>(xb, red, &wts.w, &wts.bias, ob, relu, yb);
+                // SAFETY: the CPU has AVX2 and FMA (tested above).
+                #[allow(unsafe_code)]
+                unsafe {
+                    avx2_rows::<M>(xb, red, wts, relu, yb)
+                };
             }
             (&x[n * ci..], &mut y[n * co..])
         } else {
@@ -161,16 +156,11 @@ pub fn conv2d<M: Madd>(
                 gather(x, win, ci, i / win.out_w, i % win.out_w, dst);
             }
             let yb = &mut y[first * co..(first + avx2::ROWS) * co];
-            let mut ob = 0;
-            while ob + 16 <= co {
-                // SAFETY: the CPU has AVX2 and FMA (tested above).
-                #[allow(unsafe_code)]
-                unsafe {
-                    avx2::gemm_x16(patch, red, &wts.w, &wts.bias, ob, relu, yb)
-                };
-                ob += 16;
-            }
-            gemm_rows::<M, { avx2::ROWS }>(patch, red, &wts.w, &wts.bias, ob, relu, yb);
+            // SAFETY: the CPU has AVX2 and FMA (tested above).
+            #[allow(unsafe_code)]
+            unsafe {
+                avx2_rows::<M>(patch, red, wts, relu, yb)
+            };
         }
         let dst = &mut patch[..red];
         for i in n..pixels {
@@ -269,6 +259,30 @@ fn gather(x: &[f32], win: &Window, ci: usize, oy: usize, ox: usize, dst: &mut [f
             _ => row.fill(0.0),
         }
     }
+}
+
+/// Every output channel of `avx2::ROWS` pixels (`a` is `ROWS × red`, `y` is `ROWS × C_out`):
+/// blocks of 16 channels by the explicit AVX2 kernel, the rest by [`gemm_rows`].
+///
+/// # Safety
+/// The CPU must have AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+#[inline(always)]
+unsafe fn avx2_rows<M: Madd>(
+    a: &[f32],
+    red: usize,
+    wts: &Conv2dWeights,
+    relu: bool,
+    y: &mut [f32],
+) {
+    let mut ob = 0;
+    while ob + 16 <= wts.c_out {
+        // SAFETY: the caller's CPU has AVX2 and FMA.
+        unsafe { avx2::gemm_x16(a, red, &wts.w, &wts.bias, ob, relu, y) };
+        ob += 16;
+    }
+    gemm_rows::<M, { avx2::ROWS }>(a, red, &wts.w, &wts.bias, ob, relu, y);
 }
 
 /// The scratch [`conv2d`] needs for a `k_h × k_w` kernel over `c_in` channels: the windows of
